@@ -1,0 +1,28 @@
+"""Steering gear: rudder saturation and first-order response with a rate limit."""
+
+from __future__ import annotations
+
+import casadi as ca
+
+
+def saturate(x, limit):
+    """Clip ``x`` to ``[-limit, limit]`` (CasADi expression)."""
+    return ca.fmin(ca.fmax(x, -limit), limit)
+
+
+def steering_rate(delta, delta_c, T_delta, rate_max, delta_max):
+    """Rudder rate δ̇ of the steering gear.
+
+    The command is first saturated at ±``delta_max``; the rudder then follows a first-order lag with time constant
+    ``T_delta`` whose rate is clipped to ±``rate_max`` (all angles in rad, time non-dimensional).
+
+    Examples
+    --------
+    >>> import math
+    >>> float(steering_rate(0.0, math.radians(10), 1.0, 1.6256, math.radians(35)))  # unsaturated: (δc-δ)/T
+    0.17453292519943295
+    >>> float(steering_rate(0.0, 1.0, 1.0, 0.1, math.radians(35)))  # rate limited
+    0.1
+    """
+    dc = saturate(delta_c, delta_max)
+    return saturate((dc - delta) / T_delta, rate_max)  # eq. (delta_dot_equation)

@@ -1,0 +1,64 @@
+"""PD heading control (paper §3.3).
+
+Positive rudder turns the ship to starboard (ψ increasing), so δ_c = −K_p e − K_d r with e = ψ − ψ_d turns the
+ship towards ψ_d. The heading error is wrapped to (-π, π], so headings on either side of ±π are close.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .actuator import saturate
+from .errors import check_range
+from .guidance import wrap_angle
+
+
+@dataclass(frozen=True)
+class PdHeadingParams:
+    """PD heading-controller parameters (paper Table 2).
+
+    ``kp``: proportional gain K_p^c (rad of rudder per rad of heading error, > 0); ``kd``: derivative gain K_d^c
+    (rad of rudder per unit non-dimensional yaw rate, ≥ 0); ``delta_max_deg``: command saturation (deg, (0, 45]).
+    """
+
+    kp: float = 3.5
+    kd: float = 4.0
+    delta_max_deg: float = 35.0
+
+    def __post_init__(self):
+        check_range("kp", self.kp, 0.0, None, low_open=True)
+        check_range("kd", self.kd, 0.0, None)
+        check_range("delta_max_deg", self.delta_max_deg, 0.0, 45.0, low_open=True, unit="degrees")
+
+    @property
+    def delta_max(self) -> float:
+        """Command saturation in rad."""
+        return math.radians(self.delta_max_deg)
+
+
+def heading_error(psi, psi_d):
+    """Heading error e = ψ − ψ_d wrapped to (-π, π] (rad).
+
+    Examples
+    --------
+    >>> import math
+    >>> round(math.degrees(float(heading_error(math.radians(-179), math.radians(179)))), 6)
+    2.0
+    """
+    return wrap_angle(psi - psi_d)  # eq. (Eq 18a)
+
+
+def pd_heading(psi, psi_d, r, kp, kd, delta_max):
+    """Commanded rudder δ_c = sat(−K_p e − K_d r, ±δ_max) (rad); the yaw rate r stands for ė (ψ̇_d ≈ 0).
+
+    Examples
+    --------
+    >>> import math
+    >>> round(float(pd_heading(0.0, math.radians(5), 0.0, 3.5, 4.0, math.radians(35))), 6)
+    0.305433
+    >>> float(pd_heading(0.0, 0.0, -0.1, 3.5, 4.0, 0.2))
+    0.2
+    """
+    e = heading_error(psi, psi_d)  # eq. (Eq 18a)
+    return saturate(-kp * e - kd * r, delta_max)  # eq. (PD_control)

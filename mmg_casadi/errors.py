@@ -1,0 +1,75 @@
+"""Errors raised for bad user input.
+
+Every error names the offending field and the allowed values, so the CLI can print one line and exit with
+status 2 instead of a traceback.
+"""
+
+from __future__ import annotations
+
+
+class InputError(ValueError):
+    """Bad user input (a parameter, a CLI argument or a scenario entry).
+
+    Parameters
+    ----------
+    field : str
+        Dotted name of the offending field, e.g. ``"ships[1].speed"`` or ``"--rudder"``.
+    allowed : str
+        Human-readable description of the allowed values, e.g. ``"a number in (0, 35] degrees"``.
+    got : object, optional
+        The value that was given.
+
+    Examples
+    --------
+    >>> str(InputError("rudder", "a number in (0, 35] degrees", 40))
+    'rudder: expected a number in (0, 35] degrees, got 40'
+    """
+
+    def __init__(self, field: str, allowed: str, got: object = None):
+        self.field = field
+        self.allowed = allowed
+        self.got = got
+        msg = f"{field}: expected {allowed}"
+        if got is not None:
+            msg += f", got {got!r}" if isinstance(got, str) else f", got {got}"
+        super().__init__(msg)
+
+
+class ParameterError(InputError):
+    """A model, guidance or field parameter outside its allowed range."""
+
+
+class ScenarioError(InputError):
+    """A malformed or inconsistent scenario file."""
+
+
+def check_range(field: str, value, low=None, high=None, *, low_open=False, high_open=False,
+                cls=ParameterError, unit: str = "") -> float:
+    """Return ``float(value)`` if it lies in the given interval, else raise ``cls``.
+
+    Examples
+    --------
+    >>> check_range("delta", 2.0, 0.0, None, low_open=True)
+    2.0
+    >>> check_range("delta", -1, 0.0, None, low_open=True)
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.ParameterError: delta: expected a number in (0, inf), got -1
+    """
+    lo = "-inf" if low is None else f"{low:g}"
+    hi = "inf" if high is None else f"{high:g}"
+    interval = f"{'(' if low_open or low is None else '['}{lo}, {hi}{')' if high_open or high is None else ']'}"
+    allowed = f"a number in {interval}" + (f" {unit}" if unit else "")
+    if isinstance(value, bool):
+        raise cls(field, allowed, value)
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise cls(field, allowed, value) from None
+    if x != x:
+        raise cls(field, allowed, value)
+    if low is not None and (x < low or (low_open and x == low)):
+        raise cls(field, allowed, value)
+    if high is not None and (x > high or (high_open and x == high)):
+        raise cls(field, allowed, value)
+    return x

@@ -1,0 +1,561 @@
+"""Scenario files: ships, static obstacles and channel walls of one encounter (TOML, read with :mod:`tomllib`).
+
+Conventions: positions in ship lengths L, x forward/north and y to starboard/east, headings in degrees measured
+from x towards y (clockwise in the marine view, x up and y right), speeds as fractions of the design speed,
+times non-dimensional (L/U). A scenario file looks like::
+
+    [settings]
+    method = "modified-vortex"   # inverse-square | sink-vortex | modified-vortex | velocity-obstacle | none
+    dt = 0.25                    # guidance step
+    t_max = 300.0                # horizon
+    r_safe = 15.0                # L, safe radius
+    collision_distance = 2.0     # L, ship centres closer than this collide
+    [[ships]]                    # the first ship is the own ship
+    name = "own"
+    start = [0.0, 0.0]
+    heading = 0.0                # degrees from x towards y
+    speed = 1.0                  # fraction of design speed
+    waypoints = [[50.0, 0.0]]
+    # method = "none"            # optional per-ship override of settings.method
+    # stays = false              # optional: after reaching its goal the ship stays as an obstacle
+    [[obstacles]]
+    position = [25.0, 0.0]
+    radius = 0.5
+    [[walls]]
+    points = [[0.0, 5.0], [50.0, 55.0]]   # polyline; each consecutive pair of points is one wall segment
+
+Besides the keys above, ``[settings]`` accepts ``goal_tolerance`` (L) and the optional field-parameter overrides
+listed in :data:`PARAM_KEYS`, which are kept in :attr:`Settings.params`. Their ranges are checked by the
+guidance code that uses them; here only their types are checked.
+
+Every malformed entry raises one :class:`~mmg_casadi.errors.ScenarioError` whose ``field`` is the dotted key
+(``ships[1].speed``, ``settings.method``, ``obstacles[0].position``) and whose message lists the allowed values.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .errors import ScenarioError, check_range
+
+METHODS = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle", "none")
+VO_CONES = ("huang", "wide")
+PARAM_KEYS = (
+    "k_att", "k_rep", "d0", "lam_sink", "k_vor", "k_vor0", "r_tol_vortex", "gamma_max_deg", "wall_lam",
+    "wall_d_act", "ilos_delta", "ilos_k", "kp", "kd", "vo_candidates", "vo_cone", "stall_window",
+)
+SETTINGS_KEYS = ("method", "dt", "t_max", "r_safe", "collision_distance", "goal_tolerance") + PARAM_KEYS
+SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays")
+OBSTACLE_KEYS = ("position", "radius")
+WALL_KEYS = ("points",)
+TOP_KEYS = ("settings", "ships", "obstacles", "walls")
+SPEED_RANGE = (0.2, 1.2)
+SHIP_HALF_LENGTH = 0.5
+
+_POINT = "a point [x, y] of two finite numbers (ship lengths)"
+
+
+def _as_point(p) -> tuple[float, float]:
+    """``p`` as a tuple of two floats."""
+    return (float(p[0]), float(p[1]))
+
+
+def _as_points(ps) -> tuple[tuple[float, float], ...]:
+    """``ps`` as a tuple of points."""
+    return tuple(_as_point(p) for p in ps)
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Scenario-wide settings.
+
+    ``method``: collision-avoidance method, one of :data:`METHODS`; ``dt``: guidance step (non-dimensional time,
+    rudder command held over the step); ``t_max``: horizon (non-dimensional time); ``r_safe``: safe radius
+    inside which other ships and obstacles act (L); ``collision_distance``: ship centres closer than this
+    collide (L); ``goal_tolerance``: goal reached within this distance (L); ``params``: optional field and
+    guidance parameter overrides (keys from :data:`PARAM_KEYS`; ``params`` is left out of the hash).
+
+    Examples
+    --------
+    >>> Settings("none").dt, Settings("none").params
+    (0.25, {})
+    """
+
+    method: str
+    dt: float = 0.25
+    t_max: float = 300.0
+    r_safe: float = 15.0
+    collision_distance: float = 2.0
+    goal_tolerance: float = 3.0
+    params: dict = field(default_factory=dict, hash=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "params", dict(self.params))
+
+
+@dataclass(frozen=True)
+class ShipSpec:
+    """One ship: ``name``; ``start`` position (L); ``heading_deg`` initial heading (degrees from x towards y);
+    ``speed`` as a fraction of the design speed; ``waypoints`` (L, the last one is the goal); ``method`` an
+    optional override of :attr:`Settings.method`; ``stays``: after reaching its goal the ship stays there as an
+    obstacle (otherwise it leaves the scenario).
+
+    Examples
+    --------
+    >>> s = ShipSpec("own", [0, 0], 90, 1.0, [[50, 0]])
+    >>> s.start, s.goal, round(s.heading_rad, 4)
+    ((0.0, 0.0), (50.0, 0.0), 1.5708)
+    """
+
+    name: str
+    start: tuple[float, float]
+    heading_deg: float
+    speed: float
+    waypoints: tuple[tuple[float, float], ...]
+    method: str | None = None
+    stays: bool = False
+
+    def __post_init__(self):
+        object.__setattr__(self, "start", _as_point(self.start))
+        object.__setattr__(self, "heading_deg", float(self.heading_deg))
+        object.__setattr__(self, "speed", float(self.speed))
+        object.__setattr__(self, "waypoints", _as_points(self.waypoints))
+
+    @property
+    def heading_rad(self) -> float:
+        """Initial heading in rad (from x towards y)."""
+        return math.radians(self.heading_deg)
+
+    @property
+    def goal(self) -> tuple[float, float]:
+        """The last waypoint (L)."""
+        return self.waypoints[-1]
+
+
+@dataclass(frozen=True)
+class ObstacleSpec:
+    """A static circular obstacle: centre ``position`` (L) and ``radius`` (L).
+
+    Examples
+    --------
+    >>> ObstacleSpec([25, 0])
+    ObstacleSpec(position=(25.0, 0.0), radius=0.5)
+    """
+
+    position: tuple[float, float]
+    radius: float = 0.5
+
+    def __post_init__(self):
+        object.__setattr__(self, "position", _as_point(self.position))
+        object.__setattr__(self, "radius", float(self.radius))
+
+
+@dataclass(frozen=True)
+class WallSpec:
+    """A channel wall: a polyline of at least two ``points`` (L); each consecutive pair is one segment.
+
+    Examples
+    --------
+    >>> WallSpec([[0, 5], [50, 55], [60, 55]]).segments
+    (((0.0, 5.0), (50.0, 55.0)), ((50.0, 55.0), (60.0, 55.0)))
+    """
+
+    points: tuple[tuple[float, float], ...]
+
+    def __post_init__(self):
+        object.__setattr__(self, "points", _as_points(self.points))
+
+    @property
+    def segments(self) -> tuple[tuple[tuple[float, float], tuple[float, float]], ...]:
+        """The wall segments as pairs of end points (L)."""
+        return tuple(zip(self.points[:-1], self.points[1:]))
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A whole scenario: ``settings``, ``ships`` (the first is the own ship), ``obstacles`` and ``walls``
+    (tuples, so a scenario is hashable).
+
+    Examples
+    --------
+    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> s.ships[0].name, s.obstacles, s.method_of(0)
+    ('own', (), 'none')
+    """
+
+    settings: Settings
+    ships: tuple[ShipSpec, ...]
+    obstacles: tuple[ObstacleSpec, ...] = ()
+    walls: tuple[WallSpec, ...] = ()
+
+    def __post_init__(self):
+        for name in ("ships", "obstacles", "walls"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+
+    def method_of(self, i: int) -> str:
+        """The method ship ``i`` uses: its own override, else :attr:`Settings.method`."""
+        own = self.ships[i].method
+        return self.settings.method if own is None else own
+
+
+def _table(value, key: str, allowed_keys) -> dict:
+    """``value`` as a table whose keys all lie in ``allowed_keys`` (``key`` is its dotted name, "" for the root)."""
+    if not isinstance(value, dict):
+        raise ScenarioError(key or "scenario", "a table", value)
+    for k in value:
+        if k not in allowed_keys:
+            raise ScenarioError(f"{key}.{k}" if key else k, f"a known key (one of: {', '.join(allowed_keys)})")
+    return value
+
+
+def _tables(d: dict, key: str, allowed_keys, *, required: bool) -> list[dict]:
+    """The array of tables ``d[key]`` (empty if absent and not ``required``)."""
+    if key not in d:
+        if required:
+            raise ScenarioError(key, f"at least one [[{key}]] table (required)")
+        return []
+    value = d[key]
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        raise ScenarioError(key, f"an array of tables [[{key}]]", value)
+    if required and not value:
+        raise ScenarioError(key, f"at least one [[{key}]] table (required)", value)
+    return [_table(v, f"{key}[{i}]", allowed_keys) for i, v in enumerate(value)]
+
+
+def _required(d: dict, key: str, prefix: str, allowed: str):
+    """``d[key]``, or a ScenarioError naming ``prefix.key`` if it is missing."""
+    if key not in d:
+        raise ScenarioError(f"{prefix}.{key}", f"{allowed} (a required key, missing here)")
+    return d[key]
+
+
+def _is_number(value) -> bool:
+    """True for a finite int or float (not a bool)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _number(value, key: str, allowed: str = "a finite number") -> float:
+    """``value`` as a float if it is a finite number."""
+    if not _is_number(value):
+        raise ScenarioError(key, allowed, value)
+    return float(value)
+
+
+def _range_text(key: str, low, high, **kw) -> str:
+    """The ``allowed`` text :func:`check_range` gives for this interval."""
+    try:
+        check_range(key, math.nan, low, high, cls=ScenarioError, **kw)
+    except ScenarioError as err:
+        return err.allowed
+    raise AssertionError("check_range accepted nan")
+
+
+def _ranged(value, key: str, low=None, high=None, **kw) -> float:
+    """``value`` as a float if it is a finite number (not a bool or a string) in the given interval."""
+    if not _is_number(value):
+        raise ScenarioError(key, _range_text(key, low, high, **kw), value)
+    return check_range(key, value, low, high, cls=ScenarioError, **kw)
+
+
+def _string(value, key: str, allowed=None) -> str:
+    """``value`` if it is a (non-empty) string, optionally one of ``allowed``."""
+    if allowed is not None:
+        if not isinstance(value, str) or value not in allowed:
+            raise ScenarioError(key, f"one of: {', '.join(allowed)}", value)
+        return value
+    if not isinstance(value, str) or not value:
+        raise ScenarioError(key, "a non-empty string", value)
+    return value
+
+
+def _point(value, key: str) -> tuple[float, float]:
+    """``value`` as a point: a list of two finite numbers."""
+    if not isinstance(value, (list, tuple)) or len(value) != 2 or not all(_is_number(v) for v in value):
+        raise ScenarioError(key, _POINT, value)
+    return _as_point(value)
+
+
+def _points(value, key: str, min_count: int) -> tuple[tuple[float, float], ...]:
+    """``value`` as a tuple of at least ``min_count`` points."""
+    if not isinstance(value, (list, tuple)) or len(value) < min_count:
+        noun = "point" if min_count == 1 else "points"
+        raise ScenarioError(key, f"a list of at least {min_count} {noun} [[x, y], ...] (ship lengths)", value)
+    return tuple(_point(p, f"{key}[{j}]") for j, p in enumerate(value))
+
+
+def _param(value, key: str):
+    """One optional field parameter: a number, a positive integer or a cone name."""
+    name = key.rsplit(".", 1)[-1]
+    if name == "vo_cone":
+        return _string(value, key, VO_CONES)
+    if name == "vo_candidates":
+        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+            raise ScenarioError(key, "a positive integer", value)
+        return value
+    return _number(value, key)
+
+
+def _settings(d: dict) -> Settings:
+    """Validated [settings] table."""
+    if "settings" not in d:
+        raise ScenarioError("settings", "a [settings] table (required)")
+    s = _table(d["settings"], "settings", SETTINGS_KEYS)
+    method = _string(_required(s, "method", "settings", f"one of: {', '.join(METHODS)}"), "settings.method",
+                     METHODS)
+    kw = {}
+    if "dt" in s:
+        kw["dt"] = _ranged(s["dt"], "settings.dt", 0.0, 2.0, low_open=True)
+    if "t_max" in s:
+        kw["t_max"] = _ranged(s["t_max"], "settings.t_max", 0.0, 10000.0, low_open=True)
+    for key in ("r_safe", "collision_distance", "goal_tolerance"):
+        if key in s:
+            kw[key] = _ranged(s[key], f"settings.{key}", 0.0, None, low_open=True, unit="L")
+    params = {k: _param(s[k], f"settings.{k}") for k in PARAM_KEYS if k in s}
+    return Settings(method, params=params, **kw)
+
+
+def _ship(t: dict, i: int) -> ShipSpec:
+    """Validated ``ships[i]`` table."""
+    p = f"ships[{i}]"
+    name = _string(t["name"], f"{p}.name") if "name" in t else f"ship{i}"
+    start = _point(_required(t, "start", p, _POINT), f"{p}.start")
+    heading = _number(_required(t, "heading", p, "a finite number of degrees"), f"{p}.heading",
+                      "a finite number of degrees")
+    lo, hi = SPEED_RANGE
+    speed_allowed = f"a number in [{lo:g}, {hi:g}] (fraction of design speed)"
+    speed = _ranged(_required(t, "speed", p, speed_allowed), f"{p}.speed", lo, hi, unit="(fraction of design speed)")
+    waypoints = _points(_required(t, "waypoints", p, "a list of waypoints [[x, y], ...]"), f"{p}.waypoints", 1)
+    method = _string(t["method"], f"{p}.method", METHODS) if "method" in t else None
+    stays = t.get("stays", False)
+    if not isinstance(stays, bool):
+        raise ScenarioError(f"{p}.stays", "true or false", stays)
+    return ShipSpec(name, start, heading, speed, waypoints, method, stays)
+
+
+def _obstacle(t: dict, i: int) -> ObstacleSpec:
+    """Validated ``obstacles[i]`` table."""
+    p = f"obstacles[{i}]"
+    position = _point(_required(t, "position", p, _POINT), f"{p}.position")
+    if "radius" not in t:
+        return ObstacleSpec(position)
+    return ObstacleSpec(position, _ranged(t["radius"], f"{p}.radius", 0.0, None, low_open=True, unit="L"))
+
+
+def _wall(t: dict, i: int) -> WallSpec:
+    """Validated ``walls[i]`` table."""
+    key = f"walls[{i}].points"
+    points = _points(_required(t, "points", f"walls[{i}]", "a list of at least 2 points"), key, 2)
+    for j in range(1, len(points)):
+        if points[j] == points[j - 1]:
+            raise ScenarioError(f"{key}[{j}]", "a point different from the previous one", list(points[j]))
+    return WallSpec(points)
+
+
+def _check_starts(ships, obstacles, collision_distance: float) -> None:
+    """Ship starts must lie outside every obstacle (radius + half a ship length) and apart from each other."""
+    names = {}
+    for i, ship in enumerate(ships):
+        if ship.name in names:
+            raise ScenarioError(f"ships[{i}].name", f"a name not already used by ships[{names[ship.name]}]",
+                                ship.name)
+        names[ship.name] = i
+        for j, ob in enumerate(obstacles):
+            limit = ob.radius + SHIP_HALF_LENGTH
+            if math.dist(ship.start, ob.position) < limit:
+                raise ScenarioError(f"ships[{i}].start", f"a start at least {limit:g} L (radius + 0.5 L) from "
+                                    f"the centre of obstacles[{j}], not inside it", list(ship.start))
+        for j in range(i):
+            if math.dist(ship.start, ships[j].start) < collision_distance:
+                raise ScenarioError(f"ships[{i}].start", f"a start at least collision_distance = "
+                                    f"{collision_distance:g} L from ships[{j}].start", list(ship.start))
+
+
+def scenario_from_dict(d: dict, source: str = "<dict>") -> Scenario:
+    """A validated :class:`Scenario` from a dict shaped like a scenario file.
+
+    ``source`` (a file name) is stored as the ``source`` attribute of any :class:`ScenarioError` raised.
+
+    Examples
+    --------
+    >>> d = {"settings": {"method": "none"},
+    ...      "ships": [{"start": [0, 0], "heading": 0, "speed": 1, "waypoints": [[50, 0]]}]}
+    >>> scenario_from_dict(d).ships[0].name
+    'ship0'
+    >>> d["ships"][0]["speed"] = 2
+    >>> scenario_from_dict(d)
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.ScenarioError: ships[0].speed: expected a number in [0.2, 1.2] (fraction of design speed), got 2
+    """
+    try:
+        table = _table(d, "", TOP_KEYS)
+        settings = _settings(table)
+        ships = tuple(_ship(t, i) for i, t in enumerate(_tables(table, "ships", SHIP_KEYS, required=True)))
+        obstacles = tuple(_obstacle(t, i) for i, t in
+                          enumerate(_tables(table, "obstacles", OBSTACLE_KEYS, required=False)))
+        walls = tuple(_wall(t, i) for i, t in enumerate(_tables(table, "walls", WALL_KEYS, required=False)))
+        _check_starts(ships, obstacles, settings.collision_distance)
+    except ScenarioError as err:
+        err.source = source
+        raise
+    return Scenario(settings, ships, obstacles, walls)
+
+
+def load_scenario(path) -> Scenario:
+    """Read and validate a scenario TOML file.
+
+    A missing or unreadable file raises a :class:`ScenarioError` whose field is the path, a TOML syntax error
+    one whose field is ``"toml"`` and whose message carries the parser's message.
+
+    Examples
+    --------
+    >>> from importlib.resources import files
+    >>> s = load_scenario(files("mmg_casadi") / "data" / "scenarios" / "head_on.toml")
+    >>> [ship.start for ship in s.ships]
+    [(0.0, 0.0), (50.0, 0.0)]
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise ScenarioError(str(path), "an existing, readable scenario file", err.strerror or str(err)) from None
+    except UnicodeDecodeError as err:
+        raise ScenarioError("toml", f"UTF-8 text in {path}", str(err)) from None
+    try:
+        d = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ScenarioError("toml", f"valid TOML in {path}", str(err)) from None
+    return scenario_from_dict(d, source=str(path))
+
+
+def with_method(s: Scenario, method: str) -> Scenario:
+    """``s`` with ``settings.method`` replaced (per-ship overrides are kept).
+
+    Examples
+    --------
+    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> with_method(s, "sink-vortex").settings.method
+    'sink-vortex'
+    """
+    method = _string(method, "method", METHODS)
+    return dataclasses.replace(s, settings=dataclasses.replace(s.settings, method=method))
+
+
+def _ship_dict(ship: ShipSpec) -> dict:
+    """One ship as a scenario-file table."""
+    d = {"name": ship.name, "start": list(ship.start), "heading": ship.heading_deg, "speed": ship.speed,
+         "waypoints": [list(p) for p in ship.waypoints]}
+    if ship.method is not None:
+        d["method"] = ship.method
+    d["stays"] = ship.stays
+    return d
+
+
+def scenario_to_dict(s: Scenario) -> dict:
+    """``s`` as a dict shaped like a scenario file (the inverse of :func:`scenario_from_dict`).
+
+    Examples
+    --------
+    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> scenario_to_dict(s)["ships"][0]["waypoints"]
+    [[50.0, 0.0]]
+    >>> scenario_from_dict(scenario_to_dict(s)) == s
+    True
+    """
+    st = s.settings
+    settings = {"method": st.method, "dt": st.dt, "t_max": st.t_max, "r_safe": st.r_safe,
+                "collision_distance": st.collision_distance, "goal_tolerance": st.goal_tolerance}
+    settings.update({k: st.params[k] for k in PARAM_KEYS if k in st.params})
+    return {
+        "settings": settings,
+        "ships": [_ship_dict(ship) for ship in s.ships],
+        "obstacles": [{"position": list(ob.position), "radius": ob.radius} for ob in s.obstacles],
+        "walls": [{"points": [list(p) for p in w.points]} for w in s.walls],
+    }
+
+
+def _toml_string(text: str) -> str:
+    """``text`` as a TOML basic string."""
+    out = []
+    for ch in text:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_value(value) -> str:
+    """A TOML value: bool, int, float, string or (nested) array of these."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, str):
+        return _toml_string(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {type(value).__name__} as a TOML value")
+
+
+def _is_table_array(value) -> bool:
+    """True for a non-empty list of dicts (an array of tables)."""
+    return isinstance(value, list) and bool(value) and all(isinstance(v, dict) for v in value)
+
+
+def _toml_pairs(d: dict) -> list[str]:
+    """``key = value`` lines of a table holding only values."""
+    return [f"{k} = {_toml_value(v)}" for k, v in d.items()]
+
+
+def _dumps_toml(d: dict) -> str:
+    """A small TOML writer: root values, then tables, then arrays of tables (no deeper nesting)."""
+    lines = [f"{k} = {_toml_value(v)}" for k, v in d.items() if not isinstance(v, dict) and not _is_table_array(v)]
+    for k, v in d.items():
+        if isinstance(v, dict):
+            lines += ["", f"[{k}]"] + _toml_pairs(v)
+    for k, v in d.items():
+        if _is_table_array(v):
+            for item in v:
+                lines += ["", f"[[{k}]]"] + _toml_pairs(item)
+    return "\n".join(lines).lstrip("\n") + "\n"
+
+
+def dump_scenario(s: Scenario) -> str:
+    """``s`` as scenario-file TOML text; ``scenario_from_dict(tomllib.loads(dump_scenario(s))) == s``.
+
+    Empty ``obstacles`` and ``walls`` are left out.
+
+    Examples
+    --------
+    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> print(dump_scenario(s))
+    [settings]
+    method = "none"
+    dt = 0.25
+    t_max = 300.0
+    r_safe = 15.0
+    collision_distance = 2.0
+    goal_tolerance = 3.0
+    <BLANKLINE>
+    [[ships]]
+    name = "own"
+    start = [0.0, 0.0]
+    heading = 0.0
+    speed = 1.0
+    waypoints = [[50.0, 0.0]]
+    stays = false
+    <BLANKLINE>
+    >>> scenario_from_dict(tomllib.loads(dump_scenario(s))) == s
+    True
+    """
+    d = {k: v for k, v in scenario_to_dict(s).items() if v}
+    return _dumps_toml(d)

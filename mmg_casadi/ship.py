@@ -1,0 +1,171 @@
+"""KCS particulars and MMG coefficients, read from the packaged data file ``data/kcs_mmg.toml``.
+
+All coefficients are non-dimensional in the prime-II system built on the DESIGN speed (lengths in L, time in
+L/U_des, forces over ½ρU_des²Ld, moments over ½ρU_des²L²d); the data file records the source of every number.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, fields
+from importlib import resources
+from pathlib import Path
+
+from .errors import ParameterError
+
+
+@dataclass(frozen=True)
+class ShipParams:
+    """Ship particulars and MMG coefficients of the laboratory's KCS model (see ``kcs_mmg.toml``).
+
+    Dimensional particulars: ``L``, ``B``, ``d``, ``DP`` in m; ``U_design`` in m/s; ``rho`` in kg/m³;
+    ``n_design_rpm`` in rev/min; ``xG`` in m. Everything else is non-dimensional (prime-II, design speed).
+    """
+
+    L: float
+    B: float
+    d: float
+    Cb: float
+    displacement: float
+    xG: float
+    kzz: float
+    rho: float
+    g: float
+    Fn_design: float
+    U_design: float
+    m: float
+    mx: float
+    my: float
+    Jzz: float
+    Izz: float
+    X0: float
+    Xbb: float
+    Xbr_minus_my: float
+    Xrr: float
+    Xbbbb: float
+    Yb: float
+    Yr_minus_mx: float
+    Ybbb: float
+    Ybbr: float
+    Ybrr: float
+    Yrrr: float
+    Nb: float
+    Nr: float
+    Nbbb: float
+    Nbbr: float
+    Nbrr: float
+    Nrrr: float
+    DP: float
+    wP: float
+    tP: float
+    k0: float
+    k1: float
+    k2: float
+    n_design_rpm: float
+    xP: float
+    AR_over_Ld: float
+    aspect_ratio: float
+    f_alpha: float
+    eta: float
+    epsilon: float
+    kappa: float
+    xR: float
+    lR: float
+    gammaR_pos: float
+    gammaR_neg: float
+    tR: float
+    aH: float
+    xH: float
+
+    @property
+    def xG_nd(self) -> float:
+        """Longitudinal centre of gravity x_G' = x_G/L."""
+        return self.xG / self.L
+
+    @property
+    def time_scale_s(self) -> float:
+        """Seconds per unit of non-dimensional time, L/U_des."""
+        return self.L / self.U_design
+
+
+@dataclass(frozen=True)
+class SteeringParams:
+    """Steering gear: saturation ``delta_max_deg`` (deg), time constant ``T_delta`` (non-dimensional, L/U_des),
+    rate limit ``rate_max_deg_per_s`` (deg/s, full scale)."""
+
+    delta_max_deg: float = 35.0
+    T_delta: float = 1.0
+    rate_max_deg_per_s: float = 5.0
+
+    def __post_init__(self):
+        if not 0.0 < self.delta_max_deg <= 45.0:
+            raise ParameterError("delta_max_deg", "a number in (0, 45] degrees", self.delta_max_deg)
+        if not self.T_delta > 0.0:
+            raise ParameterError("T_delta", "a number > 0 (non-dimensional time)", self.T_delta)
+        if not self.rate_max_deg_per_s > 0.0:
+            raise ParameterError("rate_max_deg_per_s", "a number > 0 deg/s", self.rate_max_deg_per_s)
+
+    @property
+    def delta_max(self) -> float:
+        """Rudder saturation in rad."""
+        return math.radians(self.delta_max_deg)
+
+    def rate_max_nd(self, ship: ShipParams) -> float:
+        """Rate limit in rad per unit non-dimensional time: 5°/s × L/U_des."""
+        return math.radians(self.rate_max_deg_per_s) * ship.time_scale_s
+
+
+DATA_FILE = "kcs_mmg.toml"
+
+
+def _read_toml(path: str | Path | None) -> dict:
+    if path is None:
+        return tomllib.loads(resources.files("mmg_casadi").joinpath("data", DATA_FILE).read_text())
+    return tomllib.loads(Path(path).read_text())
+
+
+def load_kcs(path: str | Path | None = None) -> ShipParams:
+    """Load the KCS coefficients from the packaged data file (or ``path``).
+
+    Examples
+    --------
+    >>> kcs = load_kcs()
+    >>> round(kcs.m, 6), round(kcs.Izz, 6)
+    (0.18228, 0.011432)
+    """
+    raw = _read_toml(path)
+    flat: dict = {}
+    for block in ("ship", "mass", "hull", "propeller", "rudder"):
+        flat.update(raw[block])
+    names = {f.name for f in fields(ShipParams)}
+    return ShipParams(**{k: float(v) for k, v in flat.items() if k in names})
+
+
+def load_steering(path: str | Path | None = None) -> SteeringParams:
+    """Steering-gear parameters from the data file's ``[steering]`` block."""
+    s = _read_toml(path)["steering"]
+    return SteeringParams(float(s["delta_max_deg"]), float(s["T_delta"]), float(s["rate_max_deg_per_s"]))
+
+
+def load_reference(name: str = "turning_15deg_starboard", path: str | Path | None = None) -> dict:
+    """Published validation reference stored in the data file's ``[reference.*]`` tables."""
+    return dict(_read_toml(path)["reference"][name])
+
+
+def derived_masses(ship: ShipParams) -> dict:
+    """Mass and added masses recomputed from the particulars and the dimensional added masses of the data source.
+
+    ``m' = ∇/(½L²d)``, ``I_zz' = m'(k_zz² + x_G'²)``; the added masses m_x = 1790.85 t, m_y = 44324.18 t and
+    J_zz = 140067300 t·m² (MDLHydroD, Source A) over ½L²d and ½L⁴d.
+    """
+    q = 0.5 * ship.L**2 * ship.d
+    m = ship.displacement / q
+    xg = ship.xG / ship.L
+    return {
+        "m": m,
+        "mx": 1790.85 / q,
+        "my": 44324.18 / q,
+        "Jzz": 140067300.0 / (0.5 * ship.L**4 * ship.d),
+        "Izz": m * (ship.kzz**2 + xg**2),
+    }

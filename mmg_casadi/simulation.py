@@ -1,0 +1,161 @@
+"""Compiled rollouts of the closed loop: one scenario with its full history, or a batch keeping final states.
+
+The closed-loop step is compiled once per :class:`~mmg_casadi.closed_loop.Layout` (native code, cached on disk)
+and rolled out with ``mapaccum`` in chunks of steps; a rollout stops after the chunk in which every ship has
+finished (reached its goal or diverged) or the horizon ``t_max`` (a step parameter) is reached.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from .closed_loop import AUX, NS, S_, SHIP_STATE, Layout, build_closed_loop_step, build_guidance
+from .compiled import compile_function
+
+
+@lru_cache(maxsize=64)
+def compiled_step(layout: Layout) -> ca.Function:
+    """Natively compiled closed-loop step for ``layout`` (memoised in-process, cached on disk)."""
+    return compile_function(build_closed_loop_step(layout))
+
+
+@lru_cache(maxsize=64)
+def compiled_guidance(layout: Layout) -> ca.Function:
+    """Natively compiled guidance-only Function for ``layout`` (for timing guidance calls)."""
+    return compile_function(build_guidance(layout))
+
+
+@lru_cache(maxsize=64)
+def _chunk(layout: Layout, chunk: int, batch: int) -> ca.Function:
+    step = compiled_step(layout)
+    if batch > 1:
+        step = step.map(batch)
+    return step.mapaccum(chunk)
+
+
+def _finished(layout: Layout, x: np.ndarray, t_max: float) -> np.ndarray:
+    """Per column of scenario states: every ship has stopped sailing, or the horizon is reached."""
+    x = np.atleast_2d(x.T).T
+    status = x[1 + S_["status"]::NS, :][:layout.n_ships]
+    return np.all(status != 0, axis=0) | (x[0] >= t_max - 1e-9)
+
+
+@dataclass
+class Trajectory:
+    """History of one closed-loop rollout.
+
+    Attributes
+    ----------
+    layout : Layout
+    t : ndarray (T+1,)
+        Times of the stored states (non-dimensional).
+    states : ndarray (T+1, N, NS)
+        Ship states, columns named by :data:`~mmg_casadi.closed_loop.SHIP_STATE`.
+    aux : ndarray (T, N, 4)
+        Commanded rudder, desired heading, cross-track error and reactive flag used over each step.
+    """
+
+    layout: Layout
+    t: np.ndarray
+    states: np.ndarray
+    aux: np.ndarray
+
+    def state(self, name: str, ship: int | None = None) -> np.ndarray:
+        """History of one state variable, ``(T+1, N)`` or ``(T+1,)`` for one ship."""
+        col = self.states[:, :, S_[name]]
+        return col if ship is None else col[:, ship]
+
+    def auxiliary(self, name: str, ship: int | None = None) -> np.ndarray:
+        """History of one auxiliary signal (``delta_c``, ``psi_d``, ``y_e``, ``reactive``), ``(T, N)``."""
+        col = self.aux[:, :, AUX.index(name)]
+        return col if ship is None else col[:, ship]
+
+    @property
+    def final(self) -> np.ndarray:
+        """Final ship states ``(N, NS)``."""
+        return self.states[-1]
+
+    def sailing_mask(self) -> np.ndarray:
+        """``(T+1, N)`` True while a ship is still sailing (before the sample at which it stopped)."""
+        st = self.state("status")
+        mask = st == 0
+        # keep the sample at which a ship stopped, so its last position belongs to its voyage
+        first_stop = np.argmax(~mask, axis=0)
+        for i, k in enumerate(first_stop):
+            if not mask[:, i].all():
+                mask[k, i] = True
+        return mask
+
+    def to_npz(self, path) -> None:
+        np.savez_compressed(path, t=self.t, states=self.states, aux=self.aux,
+                            state_names=np.array(SHIP_STATE), aux_names=np.array(AUX))
+
+    def to_csv(self, path, names=None) -> None:
+        """Long-format CSV: one row per (time, ship) with the MMG state and the auxiliary signals."""
+        names = names or [f"ship{i}" for i in range(self.layout.n_ships)]
+        cols = ["u", "v", "r", "x", "y", "psi", "delta", "status"]
+        aux = np.concatenate([self.aux, self.aux[-1:]], axis=0) if len(self.aux) else np.zeros(
+            (len(self.t), self.layout.n_ships, len(AUX)))
+        with open(path, "w") as fh:
+            fh.write(",".join(["t", "ship"] + cols + list(AUX)) + "\n")
+            for k, tk in enumerate(self.t):
+                for i in range(self.layout.n_ships):
+                    vals = [self.states[k, i, S_[c]] for c in cols] + list(aux[k, i])
+                    fh.write(f"{tk:.4f},{names[i]}," + ",".join(f"{v:.6g}" for v in vals) + "\n")
+
+
+def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200) -> Trajectory:
+    """Roll out one scenario until every ship has finished or ``t_max`` (in ``p``) is reached."""
+    F = _chunk(layout, chunk, 1)
+    t_max = float(p[list(_global_index()).index("t_max")])
+    xs, auxs = [np.asarray(x0, float)[:, None]], []
+    x = np.asarray(x0, float)
+    while not _finished(layout, x, t_max)[0]:
+        Xc, Ac = F(x, p)
+        Xc = np.array(Xc)
+        Ac = np.array(Ac).reshape(len(AUX), chunk, layout.n_ships, order="F")
+        xs.append(Xc)
+        auxs.append(np.transpose(Ac, (1, 2, 0)))
+        x = Xc[:, -1]
+    X = np.concatenate(xs, axis=1)
+    A = np.concatenate(auxs, axis=0) if auxs else np.zeros((0, layout.n_ships, len(AUX)))
+    # drop the frozen tail after the horizon / after the last ship finished
+    t = X[0]
+    stop = len(t) - 1
+    fin = _finished(layout, X, t_max)
+    if fin.any():
+        stop = int(np.argmax(fin))
+    X, A = X[:, :stop + 1], A[:stop]
+    states = X[1:, :].T.reshape(X.shape[1], layout.n_ships, NS)
+    return Trajectory(layout, X[0].copy(), states, A)
+
+
+@lru_cache(maxsize=1)
+def _global_index():
+    from .closed_loop import GLOBAL_PARAMS
+    return GLOBAL_PARAMS
+
+
+def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int = 100) -> tuple[np.ndarray, float]:
+    """Roll out ``M`` scenarios of one layout together (columns of ``X0`` (nx, M) and ``P`` (np, M)).
+
+    Returns the final scenario states ``(nx, M)`` and the wall time spent in compiled code (s).
+    """
+    X0 = np.asarray(X0, float)
+    P = np.asarray(P, float)
+    M = X0.shape[1]
+    F = _chunk(layout, chunk, M)
+    t_max = P[list(_global_index()).index("t_max")]
+    x = X0
+    busy = 0.0
+    while not np.all(_finished(layout, x, float(np.max(t_max)))):
+        t0 = time.perf_counter()
+        Xc, _ = F(x, P)
+        busy += time.perf_counter() - t0
+        x = np.array(Xc)[:, -M:]
+    return x, busy

@@ -1,0 +1,160 @@
+"""Linear velocity obstacle (LVO) baseline at constant speed (Huang et al. 2018, Ocean Eng. 151; paper §5).
+
+The own ship keeps its current speed and chooses a heading among ``n_candidates`` headings
+θ_j = −π + 2π j / n (j = 0 … n−1). For every active neighbour i (the caller's 0/1 mask: it exists and lies
+within R_safe) the candidate velocity v_j is forbidden when the relative velocity w = v_j − v_i points into the
+collision cone about the line of sight p_i − p_own, i.e. the angle between w and p_i − p_own is below the cone's
+half-angle α_i and w ≠ 0 (testing w instead of v_j is the cone's apex shifted by the neighbour's velocity). Two
+cones are offered, d the distance to the neighbour and D the collision distance (combined radius):
+
+* ``"huang"``: α = asin(min(1, D/d)), the exact cone of relative velocities whose straight line passes within D;
+* ``"wide"``: α = min(π/2, 2 atan(D/d)), the wider cone of the laboratory's later version (a superset).
+
+The chosen heading is the feasible candidate closest to the goal direction. Near-ties (within 1e-6 rad) go to
+the candidate closest to ``current_heading`` when it is given, else to starboard of the goal direction (as COLREG
+rules 14–15 ask). When no candidate is feasible the fallback picks the least-bad heading: the candidate whose
+largest penetration max_i (α_i − angle_ij) over the neighbours forbidding it is smallest, ties broken by the goal
+cost as above. All selection is done with CasADi ``if_else`` folds, so every argument may be symbolic (SX or MX);
+plain numbers, numpy arrays and DM give DM.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from .errors import ParameterError, check_range
+from .fields import R_MIN, _col2, _matrix, _row
+from .guidance import wrap_angle
+
+CONES = ("huang", "wide")
+TIE_EPS = 1e-6
+"""Weight (rad) of the tie-break term added to the goal cost."""
+_PEN_TOL = 1e-9
+_BIG = 1e9
+
+
+@dataclass(frozen=True)
+class VelocityObstacleParams:
+    """Velocity-obstacle parameters.
+
+    ``collision_distance``: combined radius D of the cone (L, > 0; the collision threshold, 2 L);
+    ``n_candidates``: number of candidate headings evenly spread around the circle (integer ≥ 2);
+    ``cone``: ``"huang"`` (half-angle asin(min(1, D/d))) or ``"wide"`` (half-angle min(π/2, 2 atan(D/d)), the
+    laboratory's later version and the default).
+    """
+
+    collision_distance: float = 2.0
+    n_candidates: int = 80
+    cone: str = "wide"
+
+    def __post_init__(self):
+        check_range("collision_distance", self.collision_distance, 0.0, None, low_open=True, unit="L")
+        _check_structure(self.n_candidates, self.cone)
+
+
+def _check_structure(n_candidates, cone):
+    if isinstance(n_candidates, bool) or not isinstance(n_candidates, (int, np.integer)) or n_candidates < 2:
+        raise ParameterError("n_candidates", "an integer >= 2", n_candidates)
+    if cone not in CONES:
+        raise ParameterError("cone", "one of 'huang', 'wide'", cone)
+
+
+def _half_angle(d, collision_distance, cone):
+    """Half-angle of the collision cone of a neighbour at distance ``d``."""
+    ratio = collision_distance / d
+    if cone == "huang":
+        return ca.asin(ca.fmin(1, ratio))
+    return ca.fmin(ca.pi / 2, 2 * ca.atan(ratio))
+
+
+def velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance,
+                            n_candidates, cone="wide", current_heading=None):
+    """Candidate headings and their feasibility, penetration and goal cost.
+
+    Returns a dict: ``headings`` (1×n, θ_j), ``forbidden`` (M×n, 1 where neighbour i forbids candidate j),
+    ``feasible`` (1×n), ``penetration`` (1×n, max_i (α_i − angle_ij) over the neighbours forbidding j, −π when
+    none does), ``cost`` (1×n, |wrap(θ_j − θ_goal)| plus the tie-break term), ``half_angle`` (1×M, α_i) and
+    ``goal_heading`` (θ_goal).
+
+    Examples
+    --------
+    >>> import casadi as ca
+    >>> t = velocity_obstacle_terms([0, 0], 1.0, [50, 0], ca.DM([[10], [0]]), ca.DM.zeros(2, 1), [1],
+    ...                             collision_distance=2.0, n_candidates=8, cone="huang")
+    >>> t["forbidden"]  # candidates at -180, -135, ..., 135 deg; only 0 deg points into the cone
+    DM([[0, 0, 0, 0, 1, 0, 0, 0]])
+    """
+    _check_structure(n_candidates, cone)
+    own_pos, goal, nb_pos, nb_vel = _col2(own_pos), _col2(goal), _matrix(nb_pos, 2), _matrix(nb_vel, 2)
+    m, n = nb_pos.size2(), int(n_candidates)
+    active = _row(active, m)
+    theta = -math.pi + 2 * math.pi * np.arange(n) / n
+    headings = ca.DM(theta.reshape(1, n))
+    v_cand = own_speed * ca.DM(np.vstack([np.cos(theta), np.sin(theta)]))
+    forbidden, penetration, halves = [], ca.DM.ones(1, n) * -math.pi, []
+    for i in range(m):
+        los = nb_pos[:, i] - own_pos
+        half = _half_angle(ca.fmax(ca.norm_2(los), R_MIN), collision_distance, cone)
+        w = v_cand - ca.repmat(nb_vel[:, i], 1, n)  # relative velocity: apex shifted by the neighbour's velocity
+        dot = los[0] * w[0, :] + los[1] * w[1, :]
+        cross = los[0] * w[1, :] - los[1] * w[0, :]
+        angle = ca.atan2(ca.fabs(cross), dot)
+        forb = active[i] * (ca.sum1(w * w) > 1e-12) * (angle < half)
+        penetration = ca.fmax(penetration, forb * (half - angle) + (1 - forb) * -math.pi)
+        forbidden.append(forb)
+        halves.append(half)
+    forbidden = ca.vertcat(*forbidden) if m else ca.DM.zeros(0, n)
+    feasible = ca.DM.ones(1, n)
+    for i in range(m):
+        feasible = feasible * (1 - forbidden[i, :])
+    goal_heading = ca.atan2(goal[1] - own_pos[1], goal[0] - own_pos[0])
+    off_goal = wrap_angle(headings - goal_heading)
+    if current_heading is None:
+        tie = off_goal < 0  # prefer starboard of the goal direction
+    else:
+        tie = ca.fabs(wrap_angle(headings - current_heading)) / ca.pi
+    return {
+        "headings": headings,
+        "forbidden": forbidden,
+        "feasible": feasible,
+        "penetration": penetration,
+        "cost": ca.fabs(off_goal) + TIE_EPS * tie,
+        "half_angle": ca.horzcat(*halves) if m else ca.DM.zeros(1, 0),
+        "goal_heading": goal_heading,
+    }
+
+
+def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance, n_candidates,
+                      cone="wide", current_heading=None):
+    """Desired heading ψ_d (rad, (−π, π]) chosen by the constant-speed linear velocity obstacle.
+
+    The feasible candidate with the smallest goal cost wins (strict <, so the first minimum in candidate order
+    wins exact ties); with no feasible candidate, the one with the smallest penetration (see the module notes).
+
+    Examples
+    --------
+    >>> import casadi as ca
+    >>> psi = velocity_obstacle([0, 0], 1.0, [50, 0], ca.DM([[10], [0]]), ca.DM.zeros(2, 1), [1],
+    ...                         collision_distance=2.0, n_candidates=80, cone="wide")
+    >>> round(float(psi) * 180 / ca.pi, 6)  # 22.5 deg is still inside the 22.6 deg cone: turn 27 deg to starboard
+    27.0
+    """
+    t = velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active,
+                                collision_distance=collision_distance, n_candidates=n_candidates, cone=cone,
+                                current_heading=current_heading)
+    headings, feasible, cost, pen = t["headings"], t["feasible"], t["cost"], t["penetration"]
+    best_c, best_th = _BIG, t["goal_heading"]
+    fb_p, fb_c, fb_th = _BIG, _BIG, t["goal_heading"]
+    for j in range(headings.size2()):
+        better = feasible[j] * (cost[j] < best_c)
+        best_c = ca.if_else(better, cost[j], best_c)
+        best_th = ca.if_else(better, headings[j], best_th)
+        fb_better = (pen[j] < fb_p - _PEN_TOL) + (ca.fabs(pen[j] - fb_p) <= _PEN_TOL) * (cost[j] < fb_c)
+        fb_p = ca.if_else(fb_better, pen[j], fb_p)
+        fb_c = ca.if_else(fb_better, cost[j], fb_c)
+        fb_th = ca.if_else(fb_better, headings[j], fb_th)
+    return wrap_angle(ca.if_else(best_c < _BIG / 2, best_th, fb_th))

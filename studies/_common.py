@@ -1,0 +1,107 @@
+"""Shared plumbing of the paper's studies: run one scenario for several methods and write the outputs.
+
+Each study writes ``<out>/<case>/<method>/`` (trajectory npz/CSV, figure, per-run metrics.json), a comparison
+figure per case, and ``<out>/metrics.json`` shaped ``{"cases": {CASE: {METHOD: <simulate schema>}}}``.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from mmg_casadi.cli import write_json
+from mmg_casadi.plotting import COLORS, draw_circle, draw_goal, draw_path, marine_axes
+from mmg_casadi.scenario import scenario_from_dict, with_method
+from mmg_casadi.scenario_run import load_params_file, run_scenario, write_outputs
+
+ALL_METHODS = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle")
+APF_AND_VO = ("inverse-square", "modified-vortex", "velocity-obstacle")
+
+
+def ship(name, start, heading, speed, waypoints, **kw) -> dict:
+    """A ``[[ships]]`` entry (heading in degrees, speed as a fraction of design speed)."""
+    return {"name": name, "start": list(start), "heading": heading, "speed": speed,
+            "waypoints": [list(w) for w in waypoints], **kw}
+
+
+def scenario(ships, obstacles=(), walls=(), *, method="modified-vortex", t_max=300.0, **settings):
+    d = {"settings": {"method": method, "dt": 0.25, "t_max": t_max, "r_safe": 15.0, "collision_distance": 2.0,
+                      **settings},
+         "ships": list(ships), "obstacles": list(obstacles), "walls": list(walls)}
+    return scenario_from_dict(d, source="study")
+
+
+def methods_for(args, default):
+    return tuple(args.methods) if getattr(args, "methods", None) else default
+
+
+def params_for(args):
+    return load_params_file(args.params) if getattr(args, "params", None) else None
+
+
+def run_cases(cases: dict, methods, out: Path, params=None, *, title: str = "") -> dict:
+    """Run every case for every method; write per-run outputs, a comparison figure per case and metrics.json."""
+    out = Path(out)
+    results = {}
+    metrics = {"cases": {}}
+    for case, sc in cases.items():
+        metrics["cases"][case] = {}
+        results[case] = {}
+        for m in methods:
+            r = run_scenario(with_method(sc, m), params=params)
+            write_outputs(r, out / case / m)
+            results[case][m] = r
+            metrics["cases"][case][m] = r.metrics
+            own = r.metrics["ships"][0]
+            dmin = min((p["min_distance"] for p in r.metrics["pairs"]), default=float("nan"))
+            print(f"  {case:>14s} {m:>18s}: collision={r.metrics['collision']!s:5s} min distance {dmin:6.2f} L"
+                  f"  own CE {own['ce']:.4f} MCTE {own['mcte']:.3f} L", file=sys.stderr)
+        plot_comparison(results[case], out / f"{case}.png", title=f"{title} {case}".strip())
+    write_json(out / "metrics.json", metrics)
+    return metrics
+
+
+def plot_comparison(by_method: dict, path, title="") -> Figure:
+    """One panel per method: paths (marine view), R_safe circles around obstacles, goals; plus a distance panel."""
+    n = len(by_method)
+    fig = Figure(figsize=(4.2 * n, 8), layout="constrained")
+    gs = fig.add_gridspec(2, n, height_ratios=[2.2, 1])
+    for col, (m, r) in enumerate(by_method.items()):
+        ax = fig.add_subplot(gs[0, col])
+        tr, sc = r.trajectory, r.scenario
+        mask = tr.sailing_mask()
+        for i, s in enumerate(sc.ships):
+            c = COLORS[i % len(COLORS)]
+            k = mask[:, i]
+            lab = s.name + (f" ({r.encounter_labels[i]})" if i in r.encounter_labels else "")
+            draw_path(ax, tr.state("x", i)[k], tr.state("y", i)[k], tr.state("psi", i)[k], c, label=lab,
+                      n_outlines=5)
+            g = s.waypoints[-1]
+            draw_goal(ax, g[0], g[1], c, tol=sc.settings.goal_tolerance)
+        for o in sc.obstacles:
+            ax.plot(o.position[1], o.position[0], "ko", ms=4)
+            draw_circle(ax, o.position[0], o.position[1], sc.settings.r_safe, color="r", lw=0.8)
+        for w in sc.walls:
+            pts = np.asarray(w.points)
+            ax.plot(pts[:, 1], pts[:, 0], "k-", lw=2)
+        marine_axes(ax)
+        st = "COLLISION" if r.metrics["collision"] else "no collision"
+        ax.set_title(f"{m}: {st}", fontsize=9)
+        ax.legend(fontsize=7, loc="best")
+        a2 = fig.add_subplot(gs[1, col])
+        for (a, b), d in r.pair_distances().items():
+            inside = d <= sc.settings.r_safe
+            if np.any(inside):
+                a2.plot(tr.t, np.where(inside, d, np.nan), label=f"{a}–{b}")
+        a2.axhline(sc.settings.collision_distance, color="k", ls="--", lw=1, label="2 L")
+        a2.set_xlabel("t [L/U]")
+        a2.set_ylabel("distance inside R_safe [L]")
+        a2.grid(True, alpha=0.3)
+        a2.legend(fontsize=7)
+    if title:
+        fig.suptitle(title)
+    fig.savefig(path, dpi=100)
+    return fig
