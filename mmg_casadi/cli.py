@@ -150,7 +150,8 @@ def _study(a) -> dict:
     for n in names:
         mod = importlib.import_module(f"studies.{n.replace('-', '_')}")
         target = a.out / n if a.name == "all" else a.out
-        print(f"study {n} -> {target}", file=sys.stderr)
+        if a.name == "all":
+            print(f"study {n} -> {target}", file=sys.stderr)
         out[n] = mod.run(a, target)
     return out
 

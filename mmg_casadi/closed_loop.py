@@ -20,8 +20,10 @@ import casadi as ca
 import numpy as np
 
 from . import fields, velocity_obstacle
-from .control import pd_heading
-from .guidance import ilos_step_terms, switch_waypoint
+from .control import PdHeadingParams, pd_heading
+from .errors import ParameterError, check_range
+from .fields import InverseSquareParams, ModifiedVortexParams, SinkVortexParams, WallParams
+from .guidance import IlosParams, ilos_step_terms, switch_waypoint, validate_waypoints
 from .model import NX, build_mmg, rk4
 from .ship import ShipParams, SteeringParams, load_kcs, load_steering
 
@@ -150,8 +152,8 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
     ``(ax, ay, bx, by)``.
     """
     vals = [float(globals_[name]) for name in GLOBAL_PARAMS]
-    for s in ships:
-        path = np.asarray(s["path"], float).reshape(-1, 2)
+    for i, s in enumerate(ships):
+        path = np.asarray(validate_waypoints(s["path"], f"ships[{i}].path"))
         k = len(path)
         if k > layout.max_path:
             raise ValueError(f"path of {k} points exceeds layout.max_path={layout.max_path}")
@@ -372,17 +374,48 @@ def ship_rows(layout: Layout, X: np.ndarray) -> np.ndarray:
     return X[1:, :].T.reshape(X.shape[1], layout.n_ships, NS)
 
 
+#: closed-loop parameter -> (parameter dataclass, its field); defaults and range checks live in the dataclasses
+PARAM_SOURCES = {
+    "goal_tolerance": (IlosParams, "r_tol"), "ilos_delta": (IlosParams, "delta"), "ilos_k": (IlosParams, "k"),
+    "kp": (PdHeadingParams, "kp"), "kd": (PdHeadingParams, "kd"),
+    "k_att": (InverseSquareParams, "k_att"), "k_rep": (InverseSquareParams, "k_rep"),
+    "d0": (InverseSquareParams, "d0"),
+    "lam_sink": (ModifiedVortexParams, "lam_sink"), "k_vor": (SinkVortexParams, "k_vor"),
+    "k_vor0": (ModifiedVortexParams, "k_vor0"), "r_safe": (ModifiedVortexParams, "r_safe"),
+    "r_tol_vortex": (ModifiedVortexParams, "r_tol"), "gamma_max": (ModifiedVortexParams, "gamma_max"),
+    "wall_lam": (WallParams, "lam"), "wall_d_act": (WallParams, "d_act"),
+}
+OTHER_DEFAULTS = {"dt": 0.25, "collision_distance": 2.0, "ship_radius": 0.5, "t_max": 300.0}
+
+
 def default_globals(**overrides) -> dict:
-    """The paper's parameters (lengths in L, angles in rad) for :func:`pack_params`."""
-    g = {
-        "dt": 0.25, "r_safe": 15.0, "collision_distance": 2.0, "goal_tolerance": 3.0,
-        "ilos_delta": 2.0, "ilos_k": 0.05, "kp": 3.5, "kd": 4.0, "delta_max": math.radians(35.0),
-        "k_att": 50.0, "k_rep": 200000.0, "d0": 15.0, "lam_sink": -100.0, "k_vor": -10.0, "k_vor0": -10.0,
-        "r_tol_vortex": 2.0, "gamma_max": 5 * math.pi / 8, "wall_lam": 10.0, "wall_d_act": 2.0,
-        "ship_radius": 0.5, "t_max": 300.0,
-    }
-    unknown = set(overrides) - set(g)
+    """The paper's parameters (lengths in L, angles in rad) for :func:`pack_params`, with ``overrides``.
+
+    Values are range-checked by the parameter dataclasses they come from; a bad value raises
+    :class:`~mmg_casadi.errors.ParameterError` naming the closed-loop parameter.
+
+    Examples
+    --------
+    >>> g = default_globals(kp=2.0)
+    >>> g["kp"], g["kd"], g["d0"]
+    (2.0, 4.0, 8.0)
+    >>> default_globals(ilos_delta=-1.0)
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.ParameterError: ilos_delta: expected a number in (0, inf) L, got -1.0
+    """
+    unknown = set(overrides) - set(PARAM_SOURCES) - set(OTHER_DEFAULTS) - {"delta_max"}
     if unknown:
-        raise KeyError(f"unknown parameter(s) {sorted(unknown)}; allowed: {sorted(g)}")
-    g.update(overrides)
+        raise ParameterError(sorted(unknown)[0], f"one of: {', '.join(sorted(set(PARAM_SOURCES) | set(OTHER_DEFAULTS)))}")
+    g = {}
+    for name, (cls, attr) in PARAM_SOURCES.items():
+        value = overrides.get(name, getattr(cls(), attr))
+        try:
+            cls(**{attr: value})
+        except ParameterError as e:
+            raise ParameterError(name, e.allowed, e.got) from None
+        g[name] = float(value)
+    g["delta_max"] = float(overrides.get("delta_max", PdHeadingParams().delta_max))
+    for name, default in OTHER_DEFAULTS.items():
+        g[name] = float(check_range(name, overrides.get(name, default), 0.0, None, low_open=True))
     return g

@@ -39,12 +39,15 @@ class InverseSquareParams:
     """Inverse-square APF parameters (paper Table 3).
 
     ``k_att``: attractive gain (1/unit time, ≥ 0); ``k_rep``: repulsive gain (L³/unit time, ≥ 0); ``d0``:
-    influence distance of an obstacle, measured from its rim (L, > 0).
+    influence distance of an obstacle, measured from its rim (L, > 0). The paper does not state d0; the default
+    8 L puts the stagnation point of its example (obstacle at (-10, 0), goal at (10, 0)) at 5.4 L from the
+    obstacle, "around [-15, 0] ... merely 5L from the obstacle" as the paper reads it off its figure
+    (d0 = R_safe = 15 L would put it at 6.2 L).
     """
 
     k_att: float = 50.0
     k_rep: float = 200000.0
-    d0: float = 15.0
+    d0: float = 8.0
 
     def __post_init__(self):
         check_range("k_att", self.k_att, 0.0, None)

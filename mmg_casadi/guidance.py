@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .errors import check_range
+from .errors import ParameterError, check_range
 
 _CASADI_TYPES = (ca.SX, ca.MX, ca.DM)
 
@@ -202,3 +202,17 @@ def ilos_step_terms(pos, path, idx, y_int, delta, k):
         "wp_prev": wp_prev,
         "wp_next": wp_next,
     }
+
+
+def validate_waypoints(points, field: str = "waypoints"):
+    """Check a path given as a sequence of (x, y) points: at least two points (start and one waypoint).
+
+    Examples
+    --------
+    >>> validate_waypoints([(0, 0), (50, 0)])
+    ((0.0, 0.0), (50.0, 0.0))
+    """
+    pts = tuple((float(p[0]), float(p[1])) for p in points)
+    if len(pts) < 2:
+        raise ParameterError(field, "at least two points (the start and one waypoint)", len(pts))
+    return pts

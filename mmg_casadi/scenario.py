@@ -326,8 +326,9 @@ def _ship(t: dict, i: int) -> ShipSpec:
     heading = _number(_required(t, "heading", p, "a finite number of degrees"), f"{p}.heading",
                       "a finite number of degrees")
     lo, hi = SPEED_RANGE
-    speed_allowed = f"a number in [{lo:g}, {hi:g}] (fraction of design speed)"
-    speed = _ranged(_required(t, "speed", p, speed_allowed), f"{p}.speed", lo, hi, unit="(fraction of design speed)")
+    unit = "(fraction of design speed)"
+    speed = _ranged(_required(t, "speed", p, _range_text(f"{p}.speed", lo, hi, unit=unit)), f"{p}.speed", lo, hi,
+                    unit=unit)
     waypoints = _points(_required(t, "waypoints", p, "a list of waypoints [[x, y], ...]"), f"{p}.waypoints", 1)
     method = _string(t["method"], f"{p}.method", METHODS) if "method" in t else None
     stays = t.get("stays", False)

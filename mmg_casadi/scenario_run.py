@@ -99,7 +99,10 @@ class ScenarioResult:
         """Distance from the own ship to its nearest other agent over time."""
         own = self.names()[0]
         ds = [d for (a, b), d in self.pair_distances().items() if a == own or b == own]
-        return np.nanmin(np.vstack(ds), axis=0) if ds else np.full(len(self.trajectory.t), np.inf)
+        if not ds:
+            return np.full(len(self.trajectory.t), np.inf)
+        d = np.vstack(ds)
+        return np.min(np.where(np.isnan(d), np.inf, d), axis=0)
 
 
 def build_problem(sc, params: dict | None = None):

@@ -14,7 +14,9 @@ from matplotlib.figure import Figure
 
 from mmg_casadi.cli import write_json
 from mmg_casadi.plotting import COLORS, draw_circle, draw_goal, draw_path, marine_axes
-from mmg_casadi.scenario import scenario_from_dict, with_method
+from importlib import resources
+
+from mmg_casadi.scenario import load_scenario, scenario_from_dict, with_method
 from mmg_casadi.scenario_run import load_params_file, run_scenario, write_outputs
 
 ALL_METHODS = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle")
@@ -32,6 +34,11 @@ def scenario(ships, obstacles=(), walls=(), *, method="modified-vortex", t_max=3
                       **settings},
          "ships": list(ships), "obstacles": list(obstacles), "walls": list(walls)}
     return scenario_from_dict(d, source="study")
+
+
+def packaged(name: str):
+    """A scenario shipped in ``mmg_casadi/data/scenarios/<name>.toml`` (the files double as examples)."""
+    return load_scenario(resources.files("mmg_casadi").joinpath("data", "scenarios", f"{name}.toml"))
 
 
 def methods_for(args, default):

@@ -1,4 +1,4 @@
-"""COLREG rules 13-15 (paper, section "Dynamic Obstacle Avoidance").
+"""COLREG rules 13-15 (paper, section "Dynamic Obstacle Avoidance"), from the shipped scenario files.
 
 Head-on: (0,0)->(50,0) and (50,0)->(0,0), both at design speed. Crossing: (0,0)->(50,0) and (25,25)->(25,-25).
 Overtaking: the paper gives no positions; the overtaken ship runs at half speed 12 L ahead on the same course
@@ -7,18 +7,11 @@ Overtaking: the paper gives no positions; the overtaken ship runs at half speed 
 
 from __future__ import annotations
 
-from ._common import ALL_METHODS, methods_for, params_for, run_cases, scenario, ship
+from ._common import ALL_METHODS, methods_for, packaged, params_for, run_cases
 
 
 def cases() -> dict:
-    return {
-        "overtaking": scenario([ship("own", (0, 0), 0.0, 1.0, [(100, 0)]),
-                                ship("slow", (12, 0), 0.0, 0.5, [(70, 0)])]),
-        "head-on": scenario([ship("own", (0, 0), 0.0, 1.0, [(50, 0)]),
-                             ship("target", (50, 0), 180.0, 1.0, [(0, 0)])]),
-        "crossing": scenario([ship("own", (0, 0), 0.0, 1.0, [(50, 0)]),
-                              ship("target", (25, 25), -90.0, 1.0, [(25, -25)])]),
-    }
+    return {"overtaking": packaged("overtaking"), "head-on": packaged("head_on"), "crossing": packaged("crossing")}
 
 
 def run(args, out) -> dict:

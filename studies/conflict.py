@@ -4,13 +4,11 @@
 
 from __future__ import annotations
 
-from ._common import APF_AND_VO, methods_for, params_for, run_cases, scenario, ship
+from ._common import APF_AND_VO, methods_for, packaged, params_for, run_cases
 
 
 def cases() -> dict:
-    return {"three-ships": scenario([ship("ship1", (0, 0), 0.0, 0.5, [(60, 0)]),
-                                     ship("ship2", (-20, 0), 0.0, 1.0, [(100, 0)]),
-                                     ship("ship3", (60, 0), 180.0, 1.0, [(0, 0)])], t_max=400.0)}
+    return {"three-ships": packaged("conflict")}
 
 
 def run(args, out) -> dict:

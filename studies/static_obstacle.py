@@ -1,20 +1,24 @@
 """Static obstacle (paper, section "Reactive Guidance"): own ship from the origin heading north, obstacle of
-radius L/2 at (25, 0) L, goal at (50, 0) or (60, 0) L; the paper's three fields and the velocity obstacle.
-A third case puts the obstacle just off the starboard bow, (25, 1.5) L, the paper's sink-vortex failure mode.
+radius L/2 at (25, 0) L, goal at (50, 0) L (``data/scenarios/static_obstacle.toml``) or (60, 0) L; the paper's
+three fields and the velocity obstacle. A third case puts the obstacle just off the starboard bow, (25, 1.5) L,
+the paper's sink-vortex failure mode (its coordinates are not given).
 """
 
 from __future__ import annotations
 
-from ._common import ALL_METHODS, methods_for, params_for, run_cases, scenario, ship
+import dataclasses
+
+from ._common import ALL_METHODS, methods_for, packaged, params_for, run_cases
 
 
 def cases() -> dict:
-    obs = [{"position": [25.0, 0.0], "radius": 0.5}]
+    base = packaged("static_obstacle")
+    own = base.ships[0]
     return {
-        "goal-50": scenario([ship("own", (0, 0), 0.0, 1.0, [(50, 0)])], obs),
-        "goal-60": scenario([ship("own", (0, 0), 0.0, 1.0, [(60, 0)])], obs),
-        "starboard-bow": scenario([ship("own", (0, 0), 0.0, 1.0, [(50, 0)])],
-                                  [{"position": [25.0, 1.5], "radius": 0.5}]),
+        "goal-50": base,
+        "goal-60": dataclasses.replace(base, ships=(dataclasses.replace(own, waypoints=((60.0, 0.0),)),)),
+        "starboard-bow": dataclasses.replace(base, obstacles=(dataclasses.replace(base.obstacles[0],
+                                                                                   position=(25.0, 1.5)),)),
     }
 
 

@@ -194,11 +194,11 @@ def test_smooth_must_be_positive(bad):
 
 def test_inverse_square_matches_hand_computation():
     own, goal, obs, radius = np.array([0.0, 0.0]), np.array([50.0, 0.0]), np.array([10.0, 0.0]), 0.5
-    k_att, k_rep, d0 = INV["k_att"], INV["k_rep"], INV["d0"]
+    k_att, k_rep, d0 = INV["k_att"], INV["k_rep"], 15.0
     rho = 10.0 - radius
     rep = 2 * k_rep * (own - obs) / (rho**2 * (rho + radius)) * (1 / rho - 1 / d0)
     expected = -k_att * (own - goal) + rep
-    v = ev(inverse_square(own, goal, obs, [radius], [1], **INV)).ravel()
+    v = ev(inverse_square(own, goal, obs, [radius], [1], **{**INV, "d0": d0})).ravel()
     np.testing.assert_allclose(v, expected)
     assert v[0] == pytest.approx(2500 - 400000 * (1 / 9.5 - 1 / 15) / 9.5**2)
 
@@ -232,7 +232,8 @@ def test_inverse_square_stagnation_point_lies_about_five_lengths_from_the_obstac
     x = ca.SX.sym("x")
     fx = ca.Function("fx", [x], [inverse_square(ca.vertcat(x, 0), goal, obs, [0.5], [1], **INV)[0]])
     x_stag = brentq(lambda s: float(fx(s)), -25.0, -11.0)
-    assert 4.0 <= -10.0 - x_stag <= 8.0
+    # paper: "around [-15, 0], merely 5L from the obstacle"; the default d0 = 8 L gives 5.4 L
+    assert 5.0 <= -10.0 - x_stag <= 5.6
 
 
 # --- channel walls ---------------------------------------------------------------------------------------------
@@ -321,7 +322,7 @@ def test_heading_of():
 
 
 def test_parameter_defaults_and_validation():
-    assert InverseSquareParams() == InverseSquareParams(50.0, 200000.0, 15.0)
+    assert InverseSquareParams() == InverseSquareParams(50.0, 200000.0, 8.0)
     assert ModifiedVortexParams().gamma_max == pytest.approx(5 * math.pi / 8)
     assert ModifiedVortexParams().r_tol == 2.0
     bad = [
