@@ -19,10 +19,10 @@ run: $(STAMP)
 	$(BIN)/mmg-casadi study all --out out
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -m "not slow" tests mmg_casadi --doctest-modules
+	$(BIN)/python -m pytest -q -m "not slow" tests mmg_casadi tuning --doctest-modules
 
 test-all: $(STAMP)
-	$(BIN)/python -m pytest -q tests mmg_casadi --doctest-modules
+	$(BIN)/python -m pytest -q tests mmg_casadi tuning --doctest-modules
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/guidance_calls.py

@@ -1,0 +1,772 @@
+"""The paper's statistical study at scale: plan → sampler → executor → results handler (resumable).
+
+A study is the cross product *environments × methods × runs*. Each (environment, method, run) is one random
+encounter drawn by :func:`~mmg_casadi.sampling.sample_scenario` (so every method meets the same scenarios),
+simulated by the compiled closed loop and reduced to one row of :data:`~mmg_casadi.results.RUN_COLUMNS`.
+
+* **Plan** – :func:`plan_batches` splits the runs that are not yet in ``runs.csv`` into batches (tasks) of
+  ``batch_size`` runs of one (environment, method), interleaved over the cells.
+* **Sampler / batch** – :func:`run_batch` samples the batch's scenarios, stacks their initial states and
+  parameter vectors as columns and rolls them out together with
+  :func:`~mmg_casadi.simulation.simulate_batch`: *one* compiled step per (environment, method) (all its runs
+  share one :class:`~mmg_casadi.closed_loop.Layout`), ``map`` over the scenarios and ``mapaccum`` over chunks of
+  steps until every scenario has finished. Each run is classified from its *final* state only
+  (:func:`classify`): the closed-loop state carries goal time, CE/MCTE integrals, closest approach and the
+  first collision of every ship.
+* **Executors** – :class:`LocalExecutor` (a process pool, ``fork``) or :class:`RayExecutor` (a Ray cluster)
+  run the batches and yield their rows as they complete. Workers never compile: :func:`prepare_layouts` builds
+  every needed native library in the parent first (in parallel), workers load it from the disk cache
+  (``$MMG_CASADI_CACHE``, forwarded to Ray workers).
+* **Results** – :func:`run_study` appends each finished batch to ``runs.csv`` (durably; keys already stored are
+  skipped, so an interrupted study resumes where it stopped and nothing is counted twice), then writes
+  ``summary.csv``, ``summary.md``, ``statistics.png``, ``metrics.json`` and replayable TOML files of the first
+  failures of every cell. A lock file keeps a second study from writing into the same directory at once.
+
+Outcome of a run (own ship = agent 0, judged from the final state):
+
+``success``
+    the own ship reached its goal (status 1, so ``t_goal <= t_max``) and never came closer than the collision
+    distance to another ship or a static obstacle (``t_collision < 0``).
+``fleet_success``
+    every ship reached its goal and no ship collided.
+``failure``
+    ``"collision"`` (own ship collided; ``failure_pair`` ``"0-j"`` for ship j or ``"0-obsk"`` for obstacle k,
+    ``failure_time`` the first collision time), ``"diverged"`` (the own ship left the model envelope),
+    ``"stalled"`` (not reached and no progress towards the goal for ``STALL_WINDOW`` before the end;
+    ``failure_time`` the time of its closest approach to the goal), ``"timeout"`` (otherwise;
+    ``failure_time`` = end time); ``""`` on success.
+
+CE and MCTE follow :mod:`mmg_casadi.scenario_run`: ``ce = ce_int / (delta_max * T)``,
+``mcte = mcte_int / T`` with ``T = t_goal`` if the ship reached its goal, else the end time of the run
+(``t_max``). For a diverged ship the duration of its voyage is not in the final state, so its CE/MCTE are
+``nan`` (summaries average them over successful runs only). Fleet metrics are means over the ships that
+reached their goals. ``guidance_call_us`` is the compiled time of one guidance evaluation (field / velocity
+obstacle + ILOS + PD) per ship, measured per batch on the batch's initial and final states; it is a timing
+and differs between repetitions, everything else is a deterministic function of
+``(environment, method, run, seed, t_max)``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import math
+import multiprocessing
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from .closed_loop import METHODS, NS, S_, Layout
+from .errors import InputError
+from .results import METRICS, RUN_COLUMNS, ResultsTable, summarize
+from .sampling import ENVIRONMENTS, parse_envs, sample_scenario
+from .scenario import Scenario, dump_scenario, scenario_from_dict
+from .scenario_run import STALL_WINDOW, build_problem
+
+DEFAULT_METHODS: tuple[str, ...] = ("modified-vortex", "inverse-square", "velocity-obstacle")
+"""Methods compared by the paper's statistical analysis."""
+
+BACKENDS: tuple[str, ...] = ("local", "ray")
+DEFAULT_BATCH = 32
+"""Runs per task: ≥ ~0.2 s of compiled work even for the lightest cell (environment 1, an APF)."""
+DEFAULT_CHUNK = 100
+"""Steps per ``mapaccum`` chunk (the rollout stops after the chunk in which every run has finished)."""
+MAX_FAILURE_FILES = 20
+"""Replayable scenario files written per (environment, method) cell."""
+TIMING_COLUMNS: tuple[str, ...] = ("guidance_call_us",)
+"""Columns that are measurements of time (not reproducible run to run)."""
+
+
+# ----------------------------------------------------------------------------------------------- sampling
+
+def sampled_scenario(environment: int, method: str, run: int, base_seed: int = 0, *,
+                     t_max: float = 300.0) -> Scenario:
+    """The scenario of run ``run`` of ``environment`` with every ship using ``method`` (replayable).
+
+    Examples
+    --------
+    >>> sc = sampled_scenario(1, "modified-vortex", 0)
+    >>> len(sc.ships), len(sc.obstacles), sc.settings.method, sc.settings.t_max
+    (3, 1, 'modified-vortex', 300.0)
+    """
+    sample = sample_scenario(environment, run, base_seed)
+    return scenario_from_dict(sample.to_scenario_dict(method=method, t_max=t_max),
+                              source=f"env{environment}/{method}/run{run}")
+
+
+def layout_for(environment: int, method: str, *, t_max: float = 300.0) -> Layout:
+    """The closed-loop :class:`Layout` shared by all runs of ``(environment, method)``.
+
+    Examples
+    --------
+    >>> lay = layout_for(2, "inverse-square")
+    >>> lay.n_ships, lay.n_obstacles, lay.max_path
+    (4, 2, 2)
+    """
+    return build_problem(sampled_scenario(environment, method, 0, 0, t_max=t_max))[0]
+
+
+# ------------------------------------------------------------------------------------------ classification
+
+def _ship_rows(layout: Layout, x: np.ndarray) -> np.ndarray:
+    return np.asarray(x, float)[1:1 + layout.n_ships * NS].reshape(layout.n_ships, NS)
+
+
+def classify(layout: Layout, x_final, g: dict, *, stall_window: float = STALL_WINDOW) -> dict:
+    """Outcome and metrics of one run from its final scenario state (see the module docstring).
+
+    Parameters
+    ----------
+    layout : Layout
+        Layout of the run (ships, obstacles).
+    x_final : array (nx,)
+        Final scenario state ``[t, ship_0, ship_1, ...]``.
+    g : dict
+        The run's global parameters (``t_max``, ``delta_max``), e.g. from
+        :func:`~mmg_casadi.scenario_run.build_problem`.
+    stall_window : float
+        No progress towards the goal for this long before the end of an unfinished run → ``"stalled"``.
+
+    Returns
+    -------
+    dict
+        The non-key columns of :data:`~mmg_casadi.results.RUN_COLUMNS` except ``seed`` and
+        ``guidance_call_us``.
+    """
+    x = np.asarray(x_final, float).ravel()
+    rows = _ship_rows(layout, x)
+    N = layout.n_ships
+    t_end = float(x[0])
+    t_max = float(g["t_max"])
+    delta_max = float(g["delta_max"])
+    status = rows[:, S_["status"]]
+    t_goal = rows[:, S_["t_goal"]]
+    reached = (status == 1) & (t_goal >= 0) & (t_goal <= t_max + 1e-9)
+    collided = rows[:, S_["t_collision"]] >= 0
+
+    T = np.where(reached, t_goal, np.where(status == 0, t_end, np.nan))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        T = np.where(T > 0, T, np.nan)
+        ce = rows[:, S_["ce_int"]] / (delta_max * T)
+        mcte = rows[:, S_["mcte_int"]] / T
+
+    own = rows[0]
+    if collided[0]:
+        failure = "collision"
+        j = int(own[S_["collision_with"]])
+        pair = f"0-{j}" if j < N else f"0-obs{j - N}"
+        failure_time = float(own[S_["t_collision"]])
+    elif reached[0]:
+        failure, pair, failure_time = "", "", math.nan
+    elif status[0] == 2:
+        failure, pair, failure_time = "diverged", "", math.nan
+    elif t_end - own[S_["t_best"]] >= stall_window:
+        failure, pair, failure_time = "stalled", "", float(own[S_["t_best"]])
+    else:
+        failure, pair, failure_time = "timeout", "", t_end
+
+    def fleet_mean(values):
+        v = values[reached]
+        return float(np.mean(v)) if v.size else math.nan
+
+    d_min = float(own[S_["d_min"]])
+    return {
+        "success": bool(reached[0] and not collided[0]),
+        "fleet_success": bool(np.all(reached) and not np.any(collided)),
+        "failure": failure,
+        "failure_pair": pair,
+        "failure_time": failure_time,
+        "time_to_goal": float(t_goal[0]) if reached[0] else math.nan,
+        "ce": float(ce[0]),
+        "mcte": float(mcte[0]),
+        "fleet_time_to_goal": fleet_mean(t_goal),
+        "fleet_ce": fleet_mean(ce),
+        "fleet_mcte": fleet_mean(mcte),
+        "min_distance": d_min if d_min < 1e5 else math.nan,
+        "n_ships": N,
+        "n_obstacles": layout.n_obstacles,
+    }
+
+
+# ------------------------------------------------------------------------------------------ batch rollout
+
+@lru_cache(maxsize=32)
+def _mapped_guidance(layout: Layout, n: int) -> ca.Function:
+    from .simulation import compiled_guidance
+    return compiled_guidance(layout).map(n)
+
+
+MIN_TIMING_COLUMNS = 256
+"""Guidance timing evaluates at least this many scenario states per call (tiling the batch's states), so the
+Python call overhead is negligible against the compiled work."""
+
+
+def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: float = 0.05,
+                  max_repeats: int = 50) -> float:
+    """Compiled time per guidance call per ship (µs), from the states ``X`` (nx, K) with parameters ``P``.
+
+    The compiled guidance Function (:func:`~mmg_casadi.simulation.compiled_guidance`) is mapped over the
+    columns (tiled to at least :data:`MIN_TIMING_COLUMNS`), called once to warm up and then repeatedly for
+    about ``min_time`` seconds; the result is ``elapsed / (repeats * columns * N)``.
+    """
+    X = np.asarray(X, float)
+    P = np.asarray(P, float)
+    reps = max(1, math.ceil(MIN_TIMING_COLUMNS / X.shape[1]))
+    X = np.tile(X, (1, reps))
+    P = np.tile(P, (1, reps))
+    n = X.shape[1]
+    F = _mapped_guidance(layout, n)
+    Xd, Pd = ca.DM(X), ca.DM(P)
+    F(Xd, Pd)  # warm-up (page in the library, allocate work vectors)
+    t0 = time.perf_counter()
+    F(Xd, Pd)
+    one = time.perf_counter() - t0
+    repeats = int(min(max_repeats, max(1, math.ceil(min_time / max(one, 1e-9)))))
+    t0 = time.perf_counter()
+    for _ in range(repeats):
+        F(Xd, Pd)
+    elapsed = time.perf_counter() - t0
+    return 1e6 * elapsed / (repeats * n * layout.n_ships)
+
+
+def run_scenarios(scenarios, *, chunk: int = DEFAULT_CHUNK, time_guidance_calls: bool = True,
+                  stall_window: float = STALL_WINDOW) -> list[dict]:
+    """Simulate scenarios together and classify each from its final state.
+
+    Scenarios with the same :class:`Layout` and ``t_max`` are rolled out as one batch (one compiled step, ``map`` over the
+    scenarios, ``mapaccum`` over chunks of ``chunk`` steps). Returns one dict per scenario, in order, with the
+    columns of :func:`classify` plus ``guidance_call_us`` (``nan`` unless ``time_guidance_calls``).
+    """
+    from .simulation import simulate_batch
+    problems = [build_problem(sc) for sc in scenarios]
+    # one batch per (layout, t_max): simulate_batch stops at the largest t_max of its columns, so a column
+    # with a shorter horizon (frozen at its t_max while still sailing) would never count as finished
+    groups: dict[tuple[Layout, float], list[int]] = {}
+    for i, (layout, _x0, _p, g, _merged) in enumerate(problems):
+        groups.setdefault((layout, float(g["t_max"])), []).append(i)
+    out: list[dict | None] = [None] * len(problems)
+    for (layout, _t_max), idx in groups.items():
+        X0 = np.column_stack([problems[i][1] for i in idx])
+        P = np.column_stack([problems[i][2] for i in idx])
+        XF, _busy = simulate_batch(layout, X0, P, chunk=chunk)
+        us = time_guidance(layout, np.hstack([X0, XF]), np.hstack([P, P])) if time_guidance_calls else math.nan
+        for col, i in enumerate(idx):
+            row = classify(layout, XF[:, col], problems[i][3], stall_window=stall_window)
+            row["guidance_call_us"] = us
+            out[i] = row
+    return out  # type: ignore[return-value]
+
+
+def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, t_max: float = 300.0,
+              chunk: int = DEFAULT_CHUNK) -> list[dict]:
+    """Simulate runs of one (environment, method) together and return their result rows.
+
+    Parameters
+    ----------
+    environment : int
+        Environment 1-5.
+    method : str
+        Collision-avoidance method of every ship.
+    runs : list of int
+        Run indices.
+    base_seed : int
+        Base seed of the study (stored in the ``seed`` column).
+    t_max : float
+        Time limit of every run (non-dimensional).
+    chunk : int
+        Steps per compiled chunk.
+
+    Returns
+    -------
+    list of dict
+        One row per run (keys :data:`~mmg_casadi.results.RUN_COLUMNS`), in the order of ``runs``.
+    """
+    runs = [int(r) for r in runs]
+    if not runs:
+        return []
+    scenarios = [sampled_scenario(environment, method, r, base_seed, t_max=t_max) for r in runs]
+    results = run_scenarios(scenarios, chunk=chunk)
+    rows = []
+    for r, res in zip(runs, results):
+        row = {"environment": int(environment), "method": method, "run": r, "seed": int(base_seed), **res}
+        rows.append({c: row.get(c) for c in RUN_COLUMNS})
+    return rows
+
+
+# ------------------------------------------------------------------------------------------------ planning
+
+@dataclass(frozen=True)
+class BatchTask:
+    """One unit of work: runs of one (environment, method)."""
+
+    environment: int
+    method: str
+    runs: tuple
+    base_seed: int = 0
+    t_max: float = 300.0
+    chunk: int = DEFAULT_CHUNK
+
+    def __call__(self) -> list[dict]:
+        return run_batch(self.environment, self.method, list(self.runs), self.base_seed, t_max=self.t_max,
+                         chunk=self.chunk)
+
+
+def _run_task(task: BatchTask) -> list[dict]:
+    return task()
+
+
+def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int = 0, t_max: float = 300.0,
+                 batch_size: int = DEFAULT_BATCH, chunk: int = DEFAULT_CHUNK) -> list[BatchTask]:
+    """Batches of the runs ``0..runs-1`` of every (environment, method) whose key is not in ``done``.
+
+    Batches are interleaved over the cells (first batch of every cell, then the second, ...), so the
+    progress rate and ETA are representative early on and the heavy cells do not all come last.
+
+    Examples
+    --------
+    >>> tasks = plan_batches((1, 2), ("inverse-square",), 5, done={(1, "inverse-square", 0)}, batch_size=2)
+    >>> [(t.environment, t.runs) for t in tasks]
+    [(1, (1, 2)), (2, (0, 1)), (1, (3, 4)), (2, (2, 3)), (2, (4,))]
+    """
+    cells = []
+    for env in envs:
+        for m in methods:
+            todo = [r for r in range(runs) if (env, m, r) not in done]
+            cells.append([BatchTask(env, m, tuple(todo[i:i + batch_size]), base_seed, t_max, chunk)
+                          for i in range(0, len(todo), batch_size)])
+    tasks = []
+    for k in range(max((len(c) for c in cells), default=0)):
+        tasks += [c[k] for c in cells if k < len(c)]
+    return tasks
+
+
+def _compile_item(item) -> str:
+    from .simulation import compiled_guidance, compiled_step
+    layout, kind = item
+    (compiled_step if kind == "step" else compiled_guidance)(layout)
+    return kind
+
+
+def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
+    """Compile (or load from the disk cache) the step and guidance Functions of every layout, in this process.
+
+    Libraries missing from the cache are first compiled in parallel by up to ``workers`` forked processes
+    (compiling the closed loop of the velocity obstacle for 10 ships takes minutes); afterwards this process
+    loads all of them, so forked pool workers inherit them and Ray workers find them on disk.
+    """
+    from .closed_loop import build_closed_loop_step, build_guidance
+    from .compiled import library_path
+    from .simulation import compiled_guidance, compiled_step
+    layouts = list(dict.fromkeys(layouts))
+    missing = []
+    for lay in layouts:
+        if not library_path(build_closed_loop_step(lay))[0].exists():
+            missing.append((lay, "step"))
+        if not library_path(build_guidance(lay))[0].exists():
+            missing.append((lay, "guidance"))
+    if missing:
+        if log:
+            print(f"compiling {len(missing)} closed-loop librar{'y' if len(missing) == 1 else 'ies'} "
+                  f"(once; cached in the mmg-casadi cache)", file=log)
+        n = min(max(1, workers), len(missing))
+        if n > 1:
+            ctx = multiprocessing.get_context("fork")
+            with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
+                list(pool.map(_compile_item, missing))
+    for lay in layouts:
+        compiled_step(lay)
+        compiled_guidance(lay)
+
+
+# ----------------------------------------------------------------------------------------------- executors
+
+def _check_workers(field: str, value):
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise InputError(field, "an integer >= 1 (or nothing for all cores)", value)
+    return int(value)
+
+
+class LocalExecutor:
+    """Run batches in a local process pool (``fork``), one batch per task.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Worker processes; ``None`` for ``os.cpu_count()``. With ``1`` the batches run in this process.
+    """
+
+    def __init__(self, workers: int | None = None):
+        workers = _check_workers("--workers", workers)
+        self.workers = workers or os.cpu_count() or 1
+
+    @property
+    def parallelism(self) -> int:
+        return self.workers
+
+    def run(self, tasks):
+        """Yield ``(task, rows)`` for every task as it completes (completion order)."""
+        tasks = list(tasks)
+        if self.workers == 1 or len(tasks) <= 1:
+            for t in tasks:
+                yield t, _run_task(t)
+            return
+        ctx = multiprocessing.get_context("fork")
+        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)), mp_context=ctx)
+        try:
+            futures = {pool.submit(_run_task, t): t for t in tasks}
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()
+        except BaseException:
+            # interrupted (Ctrl-C, an error, or the consumer stopped): drop queued batches and stop the
+            # running ones at once; their rows were never appended, so a rerun simulates them again
+            processes = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for proc in processes:
+                if proc.is_alive():
+                    proc.terminate()
+            raise
+        pool.shutdown()
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class RayExecutor:
+    """Run batches as Ray tasks (one CPU each) on a local or remote Ray cluster.
+
+    ``ray.init(address=address, num_cpus=num_cpus)`` is called if Ray is not initialised yet (and
+    ``ray.shutdown()`` on :meth:`close` in that case); ``num_cpus`` only applies to a new local cluster.
+    ``$MMG_CASADI_CACHE`` is forwarded to the workers, which load the compiled steps from that cache (on a
+    multi-machine cluster, point it at a shared directory or let each machine compile once).
+    """
+
+    def __init__(self, address: str | None = None, num_cpus: int | None = None):
+        self.address = address
+        self.num_cpus = _check_workers("--workers", num_cpus)
+        self._owns = False
+        try:
+            import ray  # noqa: F401
+        except ImportError:
+            raise InputError("--backend", "'local' (Ray is not installed; pip install 'mmg-casadi[ray]')",
+                             "ray") from None
+
+    def _runtime_env(self) -> dict | None:
+        cache = os.environ.get("MMG_CASADI_CACHE")
+        return {"env_vars": {"MMG_CASADI_CACHE": cache}} if cache else None
+
+    def _ensure(self) -> dict:
+        import ray
+        renv = self._runtime_env()
+        if ray.is_initialized():
+            return {"runtime_env": renv} if renv else {}
+        kw = {"address": self.address, "include_dashboard": False, "log_to_driver": False}
+        if self.address is None and self.num_cpus is not None:
+            kw["num_cpus"] = self.num_cpus
+        if renv:
+            kw["runtime_env"] = renv
+        ray.init(**kw)
+        self._owns = True
+        return {}
+
+    @property
+    def parallelism(self) -> int:
+        import ray
+        if ray.is_initialized():
+            return max(1, int(ray.cluster_resources().get("CPU", 1)))
+        return self.num_cpus or os.cpu_count() or 1
+
+    def run(self, tasks):
+        """Yield ``(task, rows)`` for every task as it completes (completion order)."""
+        import ray
+        tasks = list(tasks)
+        if not tasks:
+            return
+        opts = self._ensure()
+        remote = ray.remote(num_cpus=1)(_run_task)
+        if opts:
+            remote = remote.options(**opts)
+        refs = {remote.remote(t): t for t in tasks}
+        pending = list(refs)
+        try:
+            while pending:
+                ready, pending = ray.wait(pending, num_returns=1)
+                for ref in ready:
+                    yield refs[ref], ray.get(ref)
+        finally:
+            for ref in pending:
+                try:
+                    ray.cancel(ref, force=True)
+                except Exception:  # noqa: BLE001 - best effort on interruption
+                    pass
+
+    def close(self) -> None:
+        if self._owns:
+            import ray
+            ray.shutdown()
+            self._owns = False
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+# ----------------------------------------------------------------------------------------------- the study
+
+def _check_envs(envs) -> tuple[int, ...]:
+    if isinstance(envs, str):
+        return parse_envs(envs)
+    try:
+        items = list(envs)
+    except TypeError:
+        raise InputError("--envs", "environment numbers in 1-5", envs) from None
+    if not items or any(isinstance(e, bool) or not isinstance(e, (int, np.integer)) or e not in ENVIRONMENTS
+                        for e in items):
+        raise InputError("--envs", "environment numbers in 1-5", envs)
+    return tuple(sorted({int(e) for e in items}))
+
+
+def _check_methods(methods) -> tuple[str, ...]:
+    allowed = f"a non-empty list of: {', '.join(METHODS)}"
+    if isinstance(methods, str):
+        methods = [m.strip() for m in methods.split(",") if m.strip()]
+    try:
+        items = list(methods)
+    except TypeError:
+        raise InputError("--methods", allowed, methods) from None
+    if not items:
+        raise InputError("--methods", allowed, methods)
+    for m in items:
+        if m not in METHODS:
+            raise InputError("--methods", allowed, m)
+    return tuple(dict.fromkeys(items))
+
+
+def _check_int(field: str, value, low: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise InputError(field, f"an integer >= {low}", value)
+    return int(value)
+
+
+def _json_safe(obj):
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_json_safe(v) for v in obj]
+    return obj
+
+
+def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS, base_seed: int = 0,
+              backend: str = "local", address: str | None = None, workers: int | None = None,
+              t_max: float = 300.0, progress: bool = True, batch_size: int = DEFAULT_BATCH,
+              chunk: int = DEFAULT_CHUNK, executor=None):
+    """Run (or resume) the statistical study and write its outputs into ``out_dir``.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        Output directory: ``runs.csv`` (one row per run, appended as batches finish; ``study.json`` records
+        the horizon it was made with), ``summary.csv``,
+        ``summary.md``, ``statistics.png``, ``metrics.json`` (config + summary rows) and
+        ``failures/env{e}_{method}_run{r}.toml`` (first ≤ 20 failures per cell, replayable with
+        ``mmg-casadi simulate``).
+    runs : int
+        Runs per (environment, method), ≥ 1; run indices ``0..runs-1``.
+    envs : str or iterable of int
+        Environments, e.g. ``"1-5"`` or ``(1, 3)``.
+    methods : iterable of str
+        Collision-avoidance methods.
+    base_seed : int
+        Base seed of the scenario sampler (≥ 0); a resumed table must have been made with the same seed.
+    backend : str
+        ``"local"`` (process pool) or ``"ray"``.
+    address : str, optional
+        Ray cluster address (backend ``"ray"``).
+    workers : int, optional
+        Local worker processes (default: all cores); for Ray the CPUs of a new local cluster.
+    t_max : float
+        Time limit of every run (non-dimensional), > 0.
+    progress : bool
+        Show a progress bar on stderr (rate and ETA count only runs simulated by this call).
+    batch_size, chunk : int
+        Runs per task and steps per compiled chunk.
+    executor : LocalExecutor or RayExecutor, optional
+        Use this executor instead of one made from ``backend``/``address``/``workers`` (not closed here).
+
+    Returns
+    -------
+    Summary
+        The summary of the requested cells (rows already in ``runs.csv`` included).
+    """
+    runs = _check_int("--runs", runs, 1)
+    if backend not in BACKENDS:
+        raise InputError("--backend", f"one of: {', '.join(BACKENDS)}", backend)
+    envs = _check_envs(envs)
+    methods = _check_methods(methods)
+    base_seed = _check_int("--seed", base_seed, 0)
+    workers = _check_workers("--workers", workers)
+    batch_size = _check_int("batch_size", batch_size, 1)
+    chunk = _check_int("chunk", chunk, 1)
+    if isinstance(t_max, bool) or not isinstance(t_max, (int, float)) or not math.isfinite(t_max) or t_max <= 0:
+        raise InputError("t_max", "a number > 0", t_max)
+    t_max = float(t_max)
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    with _exclusive(out):
+        return _run_study(out, runs, envs, methods, base_seed, backend, address, workers, t_max, progress,
+                          batch_size, chunk, executor)
+
+
+@contextlib.contextmanager
+def _exclusive(out: Path):
+    """Hold an exclusive lock on ``out/.study.lock`` so two studies never append to one ``runs.csv``."""
+    fh = open(out / ".study.lock", "a+")
+    try:
+        try:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise InputError("--out", "a directory no other running study is writing to", str(out)) from None
+        yield
+    finally:
+        fh.close()
+
+
+def _run_study(out, runs, envs, methods, base_seed, backend, address, workers, t_max, progress, batch_size,
+               chunk, executor):
+    table = ResultsTable(out / "runs.csv")
+    planned = {(e, m, r) for e in envs for m in methods for r in range(runs)}
+    stored = [row for row in table.read() if (row["environment"], row["method"], row["run"]) in planned]
+    for row in stored:
+        if row["seed"] != base_seed:
+            raise InputError("--seed", f"the seed {row['seed']} that {table.path} was made with (or a new --out)",
+                             base_seed)
+    done = {(row["environment"], row["method"], row["run"]) for row in stored}
+    _check_horizon(out / "study.json", t_max, has_rows=bool(table.completed()))
+    tasks = plan_batches(envs, methods, runs, done=done, base_seed=base_seed, t_max=t_max,
+                         batch_size=batch_size, chunk=chunk)
+    log = sys.stderr if progress else None
+
+    own_executor = executor is None
+    if executor is None:
+        executor = LocalExecutor(workers) if backend == "local" else RayExecutor(address, workers)
+    started = time.perf_counter()
+    new_runs = 0
+    try:
+        if tasks:
+            cells = list(dict.fromkeys((t.environment, t.method) for t in tasks))
+            n_compile = workers or os.cpu_count() or 1
+            prepare_layouts([layout_for(e, m, t_max=t_max) for e, m in cells], n_compile, log=log)
+            bar = None
+            if progress:
+                from .progress import Progress
+                bar = Progress(len(planned), desc="statistics", initial=len(done))
+            try:
+                for _task, rows in executor.run(tasks):
+                    written = table.append(rows)
+                    new_runs += written
+                    if bar is not None:
+                        bar.update(written)
+            finally:
+                if bar is not None:
+                    bar.close()
+    finally:
+        if own_executor:
+            executor.close()
+    elapsed = time.perf_counter() - started
+
+    order = {m: i for i, m in enumerate(methods)}
+    rows = [row for row in table.read() if (row["environment"], row["method"], row["run"]) in planned]
+    rows.sort(key=lambda r: (r["environment"], order[r["method"]], r["run"]))
+    summary = summarize(rows)
+    summary.to_csv(out / "summary.csv")
+    (out / "summary.md").write_text(summary.to_markdown() + "\n", encoding="utf-8")
+    from .plot_statistics import plot_statistics
+    plot_statistics(_ordered_intervals(summary.rows), out / "statistics.png")
+    failures = write_failures(rows, out / "failures", t_max=t_max)
+
+    from .cli import write_json
+    config = {"runs": runs, "envs": list(envs), "methods": list(methods), "base_seed": base_seed,
+              "backend": backend, "address": address, "workers": workers, "t_max": t_max,
+              "batch_size": batch_size, "chunk": chunk}
+    write_json(out / "metrics.json", _json_safe({
+        "config": config, "summary": summary.rows, "runs_total": len(rows), "runs_new": new_runs,
+        "elapsed_s": elapsed, "failure_files": [str(p.relative_to(out)) for p in failures]}))
+    return summary
+
+
+def _check_horizon(path: Path, t_max: float, *, has_rows: bool) -> None:
+    """Refuse to resume a table made with another ``t_max`` (not a column of ``runs.csv``); record it."""
+    import json
+    if has_rows and path.exists():
+        try:
+            stored = float(json.loads(path.read_text(encoding="utf-8"))["t_max"])
+        except (OSError, ValueError, KeyError, TypeError):
+            stored = None
+        if stored is not None and stored != t_max:
+            raise InputError("t_max", f"the t_max = {stored:g} that {path.parent / 'runs.csv'} was made with "
+                             "(or a new --out)", t_max)
+    if not path.exists() or not has_rows:
+        from .cli import write_json
+        write_json(path, {"t_max": t_max, "stall_window": STALL_WINDOW})
+
+
+def _ordered_intervals(rows) -> list[dict]:
+    """Summary rows with every interval widened to contain its mean.
+
+    ``wilson_interval`` can return an upper bound a rounding error below a 100 % success rate, which
+    ``plot_statistics`` would turn into a (forbidden) negative error bar.
+    """
+    out = []
+    for r in rows:
+        r = dict(r)
+        for mean, low, high in [("success_rate", "success_ci_low", "success_ci_high")] + [
+                (f"{m}_mean", f"{m}_ci_low", f"{m}_ci_high") for m in METRICS]:
+            y = r.get(mean)
+            if y is None or not math.isfinite(y):
+                continue
+            if math.isfinite(r.get(low, math.nan)):
+                r[low] = min(r[low], y)
+            if math.isfinite(r.get(high, math.nan)):
+                r[high] = max(r[high], y)
+        out.append(r)
+    return out
+
+
+def write_failures(rows, directory, *, t_max: float = 300.0, limit: int = MAX_FAILURE_FILES) -> list[Path]:
+    """Write the first ``limit`` failed runs (by run index) of every cell as replayable scenario TOML files.
+
+    Files are named ``env{e}_{method}_run{r}.toml``; each holds the sampled scenario with that method.
+    """
+    directory = Path(directory)
+    by_cell: dict[tuple[int, str], list[dict]] = {}
+    for r in rows:
+        if r.get("failure"):
+            by_cell.setdefault((r["environment"], r["method"]), []).append(r)
+    paths = []
+    for (env, method), failed in by_cell.items():
+        for r in sorted(failed, key=lambda r: r["run"])[:limit]:
+            sc = sampled_scenario(env, method, r["run"], r["seed"] or 0, t_max=t_max)
+            path = directory / f"env{env}_{method}_run{r['run']}.toml"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(dump_scenario(sc), encoding="utf-8")
+            paths.append(path)
+    return paths

@@ -1,0 +1,124 @@
+"""``mmg-casadi tune pd``: design the PD heading controller at a speed, compare with the paper's gains.
+
+Writes ``root_locus.png``, ``step.png`` (design), ``step_paper.png``, ``gain_map.png`` and ``metrics.json`` into
+``--out``. Overshoots are in percent of the 10° heading step, times in L/U_des; the waypoint-square study runs at
+the design speed whatever ``--speed`` is.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from mmg_casadi.cli import write_json
+from mmg_casadi.errors import InputError, check_range
+
+from .linear import fit_nomoto_step
+from .pd import (PdSpec, design_pd, paper_gains_map, plot_gain_map, plot_root_locus, plot_step,
+                 verify_nonlinear)
+
+
+def _validate(args) -> tuple[float, float, float | None, Path]:
+    speed = check_range("--speed", getattr(args, "speed", 1.0), 0.2, 1.2, cls=InputError,
+                        unit="(fraction of the design speed)")
+    zeta = getattr(args, "zeta", None)
+    zeta = 0.8 if zeta is None else check_range("--zeta", zeta, 0.0, 2.0, low_open=True, cls=InputError)
+    wn = getattr(args, "wn", None)
+    if wn is not None:
+        wn = check_range("--wn", wn, 0.0, None, low_open=True, cls=InputError, unit="(U_des/L)")
+    out = getattr(args, "out", None)
+    if out is None:
+        raise InputError("--out", "an output directory")
+    return speed, zeta, wn, Path(out)
+
+
+def _finite(obj):
+    """``obj`` with non-finite floats (unsettled or unstable responses, infinite margins) replaced by None."""
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def run(args) -> dict:
+    """Design, verify and plot; return (and write to ``out/metrics.json``) the metrics.
+
+    ``args`` needs ``speed``, ``zeta`` (None → 0.8), ``wn`` (None → default rule of :mod:`tuning.pd`) and
+    ``out``. Non-finite numbers are written as null.
+    """
+    speed, zeta, wn, out = _validate(args)
+    design = design_pd(speed, PdSpec(zeta=zeta, wn=wn))
+    gmap = paper_gains_map(speed)
+    paper = gmap.paper
+    check = verify_nonlinear(design)
+    check_paper = verify_nonlinear(paper)
+    fits = {"starboard": fit_nomoto_step(speed, 0.1), "port": fit_nomoto_step(speed, -0.01)}
+
+    out.mkdir(parents=True, exist_ok=True)
+    plot_root_locus(design, out / "root_locus.png", paper=paper)
+    plot_step(design, check, out / "step.png")
+    plot_step(paper, check_paper, out / "step_paper.png")
+    plot_gain_map(gmap, out / "gain_map.png", design=design)
+
+    d = design.to_dict()
+    metrics = {
+        "speed": speed,
+        "side": design.side,
+        "kp": design.kp,
+        "kd": design.kd,
+        "method": design.method,
+        "zeta": design.zeta,
+        "wn": design.wn,
+        "wn_source": design.wn_source,
+        "wn_limits": design.limits,
+        "nomoto_K": design.nomoto_K,
+        "nomoto_T": design.nomoto_T,
+        "nomoto_K_own": d["nomoto_K_own"],
+        "nomoto_T_own": d["nomoto_T_own"],
+        "nomoto_fit": {side: f.to_dict() for side, f in fits.items()},
+        "dominant_zeta": design.loop.dominant_zeta,
+        "dominant_wn": design.loop.dominant_wn,
+        "poles": d["poles"],
+        "margins": {"gain_margin": d["gain_margin"], "gain_margin_db": d["gain_margin_db"],
+                    "phase_margin_deg": d["phase_margin"], "w_gain_crossover": d["w_gain_crossover"],
+                    "w_phase_crossover": d["w_phase_crossover"]},
+        "predicted_overshoot": design.predicted_overshoot,
+        "overshoot_linear": design.overshoot,
+        "overshoot_nonlinear": check.step.overshoot,
+        "overshoot_nonlinear_opposite": check.opposite.overshoot,
+        "settling_time_linear": design.settling_time,
+        "settling_time_nonlinear": check.step.settling_time,
+        "settling_time_nonlinear_opposite": check.opposite.settling_time,
+        "step_deg": abs(check.to_dict()["step_deg"]),
+        "step_direction": "port" if check.step.psi_d < 0 else "starboard",
+        "peak_rudder_deg": design.loop.step.peak_rudder_deg,
+        "saturates": design.saturates,
+        "nomoto_formula": d.get("nomoto_formula"),
+        "paper_gains": {
+            "kp": paper.kp, "kd": paper.kd, "zeta": paper.zeta, "wn": paper.wn,
+            "dominant_zeta": paper.loop.dominant_zeta, "dominant_wn": paper.loop.dominant_wn,
+            "overshoot_linear": paper.overshoot, "overshoot_nonlinear": check_paper.step.overshoot,
+            "overshoot_nonlinear_opposite": check_paper.opposite.overshoot,
+            "settling_time_linear": paper.settling_time, "settling_time_nonlinear": check_paper.step.settling_time,
+            "stable": paper.loop.stable,
+            "margins": {"gain_margin": paper.to_dict()["gain_margin"],
+                        "phase_margin_deg": paper.loop.phase_margin},
+        },
+        "waypoint_square": {"design": check.square, "paper_gains": check_paper.square},
+    }
+    metrics = _finite(metrics)
+    write_json(out / "metrics.json", metrics)
+    print(f"PD design at speed {speed:g} ({design.method}, zeta {design.zeta:g}, wn {design.wn:.4g} "
+          f"from {design.wn_source}): kp = {design.kp:.4g}, kd = {design.kd:.4g}")
+    print(f"  Nomoto K = {design.nomoto_K:.4g}, T = {design.nomoto_T:.4g} (design-speed units, {design.side} side); "
+          f"overshoot linear {design.overshoot:.2f} %, nonlinear {check.step.overshoot:.2f} %")
+    print(f"  paper gains kp = {paper.kp:g}, kd = {paper.kd:g}: dominant zeta {paper.loop.dominant_zeta:.3f}, "
+          f"overshoot linear {paper.overshoot:.2f} %, nonlinear {check_paper.step.overshoot:.2f} %")
+    sq, sqp = check.square, check_paper.square
+    print(f"  waypoint square: design CE {sq['ce']:.4f} MCTE {sq['mcte']:.4f} ({sq['status']}); "
+          f"paper gains CE {sqp['ce']:.4f} MCTE {sqp['mcte']:.4f} ({sqp['status']})")
+    print(f"  -> {out}")
+    return metrics
