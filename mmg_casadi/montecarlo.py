@@ -700,7 +700,7 @@ def _run_study(out, runs, envs, methods, base_seed, backend, address, workers, t
     summary.to_csv(out / "summary.csv")
     (out / "summary.md").write_text(summary.to_markdown() + "\n", encoding="utf-8")
     from .plot_statistics import plot_statistics
-    plot_statistics(_ordered_intervals(summary.rows), out / "statistics.png")
+    plot_statistics(summary, out / "statistics.png")
     failures = write_failures(rows, out / "failures", t_max=t_max)
 
     from .cli import write_json
@@ -727,28 +727,6 @@ def _check_horizon(path: Path, t_max: float, *, has_rows: bool) -> None:
     if not path.exists() or not has_rows:
         from .cli import write_json
         write_json(path, {"t_max": t_max, "stall_window": STALL_WINDOW})
-
-
-def _ordered_intervals(rows) -> list[dict]:
-    """Summary rows with every interval widened to contain its mean.
-
-    ``wilson_interval`` can return an upper bound a rounding error below a 100 % success rate, which
-    ``plot_statistics`` would turn into a (forbidden) negative error bar.
-    """
-    out = []
-    for r in rows:
-        r = dict(r)
-        for mean, low, high in [("success_rate", "success_ci_low", "success_ci_high")] + [
-                (f"{m}_mean", f"{m}_ci_low", f"{m}_ci_high") for m in METRICS]:
-            y = r.get(mean)
-            if y is None or not math.isfinite(y):
-                continue
-            if math.isfinite(r.get(low, math.nan)):
-                r[low] = min(r[low], y)
-            if math.isfinite(r.get(high, math.nan)):
-                r[high] = max(r[high], y)
-        out.append(r)
-    return out
 
 
 def write_failures(rows, directory, *, t_max: float = 300.0, limit: int = MAX_FAILURE_FILES) -> list[Path]:

@@ -272,6 +272,8 @@ def wilson_interval(k: int, n: int, z: float = Z_95) -> tuple[float, float]:
     (0.8882, 0.9785)
     >>> wilson_interval(0, 10)[0]
     0.0
+    >>> wilson_interval(10, 10)[1]
+    1.0
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise InputError("n", "an integer >= 1", n)
@@ -284,7 +286,8 @@ def wilson_interval(k: int, n: int, z: float = Z_95) -> tuple[float, float]:
     denom = 1.0 + z2 / n
     centre = (p + z2 / (2 * n)) / denom
     half = z / denom * math.sqrt(p * (1 - p) / n + z2 / (4 * n * n))
-    return max(0.0, centre - half), min(1.0, centre + half)
+    # the interval always contains p; clamp so rounding at k = 0 or k = n cannot put p outside it
+    return min(p, max(0.0, centre - half)), max(p, min(1.0, centre + half))
 
 
 def mean_ci(values, z: float = Z_95) -> tuple[float, float, float]:

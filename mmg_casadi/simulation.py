@@ -38,11 +38,21 @@ def _chunk(layout: Layout, chunk: int, batch: int) -> ca.Function:
     return step.mapaccum(chunk)
 
 
-def _finished(layout: Layout, x: np.ndarray, t_max: float) -> np.ndarray:
-    """Per column of scenario states: every ship has stopped sailing, or the horizon is reached."""
+@lru_cache(maxsize=64)
+def _chunk_final(layout: Layout, chunk: int, batch: int) -> ca.Function:
+    """``chunk`` steps of a batch returning only the final states (no history copied out of compiled code)."""
+    F = _chunk(layout, chunk, batch)
+    x = ca.MX.sym("x", layout.nx, batch)
+    p = ca.MX.sym("p", layout.np, batch)
+    X, _ = F(x, p)
+    return ca.Function(f"chunk_final_{layout.key()}_{chunk}_{batch}", [x, p], [X[:, -batch:]])
+
+
+def _finished(layout: Layout, x: np.ndarray, t_max) -> np.ndarray:
+    """Per column of scenario states: every ship has stopped sailing, or that column's horizon is reached."""
     x = np.atleast_2d(x.T).T
     status = x[1 + S_["status"]::NS, :][:layout.n_ships]
-    return np.all(status != 0, axis=0) | (x[0] >= t_max - 1e-9)
+    return np.all(status != 0, axis=0) | (x[0] >= np.asarray(t_max) - 1e-9)
 
 
 @dataclass
@@ -118,7 +128,8 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200)
     while not _finished(layout, x, t_max)[0]:
         Xc, Ac = F(x, p)
         Xc = np.array(Xc)
-        Ac = np.array(Ac).reshape(len(AUX), chunk, layout.n_ships, order="F")
+        # mapaccum stacks the (NAUX, N) output of each step horizontally: step-major blocks of N columns
+        Ac = np.array(Ac).reshape(len(AUX), chunk, layout.n_ships)
         xs.append(Xc)
         auxs.append(np.transpose(Ac, (1, 2, 0)))
         x = Xc[:, -1]
@@ -149,13 +160,12 @@ def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int 
     X0 = np.asarray(X0, float)
     P = np.asarray(P, float)
     M = X0.shape[1]
-    F = _chunk(layout, chunk, M)
+    F = _chunk_final(layout, chunk, M)
     t_max = P[list(_global_index()).index("t_max")]
     x = X0
     busy = 0.0
-    while not np.all(_finished(layout, x, float(np.max(t_max)))):
+    while not np.all(_finished(layout, x, t_max)):
         t0 = time.perf_counter()
-        Xc, _ = F(x, P)
+        x = np.array(F(x, P))
         busy += time.perf_counter() - t0
-        x = np.array(Xc)[:, -M:]
     return x, busy

@@ -221,7 +221,6 @@ def _own_mcte_from_states(res):
 
 def test_batch_ce_mcte_agree_with_run_scenario(reference_rows):
     checked = 0
-    aux_misordered = False
     for row in reference_rows[:3]:
         res = run_scenario(sampled_scenario(1, METHOD, row["run"], SEED))
         own = res.metrics["ships"][0]
@@ -235,16 +234,10 @@ def test_batch_ce_mcte_agree_with_run_scenario(reference_rows):
         # MCTE: same definition as run_scenario (trapezoid of |y_e| up to the goal), y_e evaluated afresh
         mcte_ref, y_e = _own_mcte_from_states(res)
         assert row["mcte"] == pytest.approx(mcte_ref, rel=0.02), f"run {row['run']} MCTE"
-        if np.allclose(res.trajectory.auxiliary("y_e", 0), y_e):
-            assert row["mcte"] == pytest.approx(own["mcte"], rel=0.02), f"run {row['run']} MCTE vs run_scenario"
-        else:
-            aux_misordered = True
+        np.testing.assert_allclose(res.trajectory.auxiliary("y_e", 0), y_e, atol=1e-9)
+        assert row["mcte"] == pytest.approx(own["mcte"], rel=0.02), f"run {row['run']} MCTE vs run_scenario"
         checked += 1
     assert checked >= 2
-    if aux_misordered:
-        pytest.xfail("simulation.simulate() stores aux in the wrong order for N > 1 ships (reshape of the "
-                     "mapaccum output (NAUX, N*chunk) as (NAUX, chunk, N)), so run_scenario's MCTE is wrong; "
-                     "batch MCTE agrees with the correctly evaluated y_e")
 
 
 @pytest.mark.parametrize("kwargs, field", [

@@ -144,3 +144,20 @@ def test_ship_circling_without_progress_is_reported_stalled():
     own = run_scenario(scenario_from_dict(d)).metrics["ships"][0]
     assert own["status"] == "stalled" and not own["reached_goal"]
     assert own["stalled_at"] is not None and len(own["stalled_at"]) == 2
+
+
+def test_aux_history_is_per_ship_for_several_ships():
+    """The recorded cross-track error of each ship equals the one recomputed from its own states."""
+    from mmg_casadi.guidance import path_errors
+    d = {"settings": {"method": "modified-vortex", "t_max": 60.0},
+         "ships": [{"name": "a", "start": [0, 0], "heading": 0.0, "speed": 1.0, "waypoints": [[50, 0]]},
+                   {"name": "b", "start": [50, 1], "heading": 180.0, "speed": 0.6, "waypoints": [[0, 1]]},
+                   {"name": "c", "start": [25, -30], "heading": 90.0, "speed": 0.8, "waypoints": [[25, 30]]}]}
+    r = run_scenario(scenario_from_dict(d))
+    tr = r.trajectory
+    mask = tr.sailing_mask()[:-1]
+    for i, s in enumerate(r.scenario.ships):
+        k = np.flatnonzero(mask[:, i])[::7]
+        for kk in k:
+            _, y_e = path_errors([tr.state("x", i)[kk], tr.state("y", i)[kk]], s.start, s.waypoints[0])
+            assert tr.auxiliary("y_e", i)[kk] == pytest.approx(float(y_e), abs=1e-9)
