@@ -163,8 +163,22 @@ def yaw_subsystem(speed: float = 1.0, side: str = "port") -> YawModel:
     return YawModel(speed, n, side, A, B, C, c)
 
 
+class _OwnSpeedUnits:
+    """``K`` and ``T`` (design-speed units) converted to the ship's own speed ``speed`` (fraction of U_des)."""
+
+    @property
+    def K_own(self) -> float:
+        """Gain in own-speed units (yaw rate over U/L): ``K U_des/U``."""
+        return self.K / self.speed
+
+    @property
+    def T_own(self) -> float:
+        """Time constant in own-speed units (L/U): ``T U/U_des``."""
+        return self.T * self.speed
+
+
 @dataclass(frozen=True)
-class Nomoto:
+class Nomoto(_OwnSpeedUnits):
     """Nomoto model of ``r/δ`` in design-speed units: ``K(1 + T3 s)/((1 + T1 s)(1 + T2 s))``, first-order
     ``K/(1 + T s)`` with ``T = T1 + T2 - T3``.
 
@@ -178,16 +192,6 @@ class Nomoto:
     T3: float
     speed: float
     side: str
-
-    @property
-    def K_own(self) -> float:
-        """Gain in own-speed units (yaw rate over U/L): ``K U_des/U``."""
-        return self.K / self.speed
-
-    @property
-    def T_own(self) -> float:
-        """Time constant in own-speed units (L/U): ``T U/U_des``."""
-        return self.T * self.speed
 
     def T_seconds(self, ship=None) -> float:
         """Time constant in seconds at full scale."""
@@ -239,7 +243,7 @@ def nomoto_first_order(yaw_model: YawModel) -> Nomoto:
 
 
 @dataclass(frozen=True)
-class NomotoFit:
+class NomotoFit(_OwnSpeedUnits):
     """First-order Nomoto model fitted to a nonlinear rudder step, with the linear model of the same side.
 
     ``t`` and ``r`` are the simulated yaw-rate history (design-speed units); ``rms`` the fit's RMS residual.
@@ -254,14 +258,6 @@ class NomotoFit:
     linear: Nomoto
     t: np.ndarray = field(repr=False)
     r: np.ndarray = field(repr=False)
-
-    @property
-    def K_own(self) -> float:
-        return self.K / self.speed
-
-    @property
-    def T_own(self) -> float:
-        return self.T * self.speed
 
     @property
     def K_error(self) -> float:
