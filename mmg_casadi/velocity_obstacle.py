@@ -20,6 +20,7 @@ plain numbers, numpy arrays and DM give DM.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -135,6 +136,16 @@ def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, colli
     The feasible candidate with the smallest goal cost wins (strict <, so the first minimum in candidate order
     wins exact ties); with no feasible candidate, the one with the smallest penetration (see the module notes).
 
+    Implementation: the cone test angle(w, l) < α is evaluated without trigonometry on the symbols, as
+    sin(α)·(w·l) − cos(α)·|w × l| > 0 (the sign of |w||l| sin(α − angle)), with sin α and cos α from the cone
+    formula algebraically and w·l, w × l linear in the numeric candidate directions. Only when no candidate is
+    feasible, or in the degenerate cases where that test might not be the same decision (an active neighbour
+    within R_MIN of the own position, e.g. exactly on it, or |own speed − neighbour speed| ≤ 1e-5 so that some w
+    may be ~0), the direct implementation (the one this replaces) is evaluated — inside a conditional
+    (``Function.conditional``) called as a never-inlined node, so it costs nothing otherwise. The whole guidance
+    is itself a never-inlined Function per (neighbour count, candidates, cone), so a closed loop of many ships
+    generates and compiles its code once.
+
     Examples
     --------
     >>> import casadi as ca
@@ -142,6 +153,116 @@ def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, colli
     ...                         collision_distance=2.0, n_candidates=80, cone="wide")
     >>> round(float(psi) * 180 / ca.pi, 6)  # 22.5 deg is still inside the 22.6 deg cone: turn 27 deg to starboard
     27.0
+    """
+    _check_structure(n_candidates, cone)
+    own_pos, goal, nb_pos, nb_vel = _col2(own_pos), _col2(goal), _matrix(nb_pos, 2), _matrix(nb_vel, 2)
+    m, n = nb_pos.size2(), int(n_candidates)
+    args = [own_pos, own_speed, goal, nb_pos, nb_vel, _row(active, m), collision_distance]
+    if current_heading is not None:
+        args.append(current_heading)
+    return _vo_function(m, n, cone, current_heading is not None)(*args)
+
+
+@functools.lru_cache(maxsize=None)
+def _vo_function(m, n, cone, with_heading):
+    """The velocity obstacle for ``m`` neighbours as a never-inlined Function: a closed loop of many ships calls
+    it once per ship but its code is generated (and compiled) only once."""
+    own, speed, goal = ca.SX.sym("own", 2), ca.SX.sym("U"), ca.SX.sym("goal", 2)
+    nb, nbv, act, dist = ca.SX.sym("nb", 2, m), ca.SX.sym("nbv", 2, m), ca.SX.sym("a", 1, m), ca.SX.sym("D")
+    ins = [own, speed, goal, nb, nbv, act, dist] + ([ca.SX.sym("h")] if with_heading else [])
+    out = _velocity_obstacle_expr(own, speed, goal, nb, nbv, act, dist, n, cone, ins[7] if with_heading else None)
+    tag = f"vo_m{m}_n{n}_{cone}{'_h' if with_heading else ''}"
+    return ca.Function(tag, ins, [out], {"never_inline": True})
+
+
+def _velocity_obstacle_expr(own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance, n, cone,
+                            current_heading):
+    """Expression of :func:`velocity_obstacle` (inputs already as CasADi matrices, ``n`` candidates)."""
+    m = nb_pos.size2()
+    theta = -math.pi + 2 * math.pi * np.arange(n) / n
+    cos_t, sin_t = np.cos(theta), np.sin(theta)
+    pair = n % 2 == 0
+    half = n // 2 if pair else n
+    # S_ij = sin α_i (l_i · w_ij) − cos α_i |l_i × w_ij| with w_ij = U (cos θ_j, sin θ_j) − v_i; forbidden ⟺ S_ij > 0
+    n_forb = None  # number of neighbours forbidding each candidate
+    degenerate = 0
+    for i in range(m):
+        los = nb_pos[:, i] - own_pos
+        dist_i = ca.norm_2(los)
+        r = collision_distance / ca.fmax(dist_i, R_MIN)
+        if cone == "huang":
+            r1 = ca.fmin(1, r)
+            sin_a, cos_a = r1, ca.sqrt(1 - r1 * r1)
+        else:  # 2 atan(r) ≥ π/2 ⟺ r ≥ 1
+            r1 = ca.fmin(1, r)
+            q = 1 + r1 * r1
+            sin_a, cos_a = 2 * r1 / q, (1 - r1 * r1) / q
+        on = active[i] == 1  # the direct product ∏(1 − active·forbidden) vanishes only for active == 1
+        sin_a, cos_a = ca.if_else(on, sin_a, 0), ca.if_else(on, cos_a, 1)  # off: S = −|l × w| ≤ 0, never > 0
+        us, ut = sin_a * own_speed, cos_a * own_speed
+        a, b = us * los[0], us * los[1]
+        k = sin_a * (los[0] * nb_vel[0, i] + los[1] * nb_vel[1, i])
+        e, f = -ut * los[1], ut * los[0]
+        g = cos_a * (los[0] * nb_vel[1, i] - los[1] * nb_vel[0, i])
+        # S_ij > 0 ⟺ x − k > |y − g| ⟺ (x − y > k − g) ∧ (x + y > k + g), x = U sin α l·u_j, y = U cos α l×u_j:
+        # both sides are linear in the candidate direction u_j; the opposite candidate (θ + π, n even) reuses the
+        # products with the comparisons reversed
+        p1, q1, k1, p2, q2, k2 = a - e, b - f, k - g, a + e, b + f, k + g
+        m1, m2 = -k1, -k2
+        hit = [None] * n
+        for j in range(half):
+            u1, u2 = p1 * cos_t[j] + q1 * sin_t[j], p2 * cos_t[j] + q2 * sin_t[j]
+            hit[j] = ca.logic_and(u1 > k1, u2 > k2)
+            if pair:
+                hit[j + half] = ca.logic_and(u1 < m1, u2 < m2)
+        n_forb = hit if n_forb is None else [c + h for c, h in zip(n_forb, hit)]
+        speed_gap = ca.fabs(ca.fabs(own_speed) - ca.norm_2(nb_vel[:, i]))
+        degenerate = degenerate + on * ((dist_i <= R_MIN) + (speed_gap <= 1e-5))
+    goal_heading = ca.atan2(goal[1] - own_pos[1], goal[0] - own_pos[0])
+    headings = ca.DM(theta.reshape(1, n))
+    off_goal = wrap_angle(headings - goal_heading)
+    if current_heading is None:
+        tie = off_goal < 0
+    else:
+        tie = ca.fabs(wrap_angle(headings - current_heading)) / ca.pi
+    cost = ca.fabs(off_goal) + TIE_EPS * tie
+    best_c, best_th = _BIG, goal_heading
+    for j in range(n):
+        ok = cost[j] < best_c if n_forb is None else (n_forb[j] == 0) * (cost[j] < best_c)
+        best_c = ca.if_else(ok, cost[j], best_c)
+        best_th = ca.if_else(ok, theta[j], best_th)
+    psi = wrap_angle(best_th)
+    if m == 0:
+        return psi
+    direct = (best_c >= _BIG / 2) + (degenerate > 0)
+    args = [own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance]
+    if current_heading is not None:
+        args.append(current_heading)
+    psi_direct = _direct_function(m, n, cone, current_heading is not None)(ca.logic_not(direct), *args)
+    return ca.if_else(direct, psi_direct, psi)
+
+
+@functools.lru_cache(maxsize=None)
+def _direct_function(m, n, cone, with_heading):
+    """Never-inlined conditional: index 0 → the direct implementation, otherwise 0 (nothing evaluated)."""
+    own, speed, goal = ca.SX.sym("own", 2), ca.SX.sym("U"), ca.SX.sym("goal", 2)
+    nb, nbv, act, dist = ca.SX.sym("nb", 2, m), ca.SX.sym("nbv", 2, m), ca.SX.sym("a", 1, m), ca.SX.sym("D")
+    ins = [own, speed, goal, nb, nbv, act, dist] + ([ca.SX.sym("h")] if with_heading else [])
+    out = _velocity_obstacle_reference(own, speed, goal, nb, nbv, act, collision_distance=dist, n_candidates=n,
+                                       cone=cone, current_heading=ins[7] if with_heading else None)
+    tag = f"vo_direct_m{m}_n{n}_{cone}{'_h' if with_heading else ''}"
+    full = ca.Function(tag + "_eval", ins, [out])
+    skip = ca.Function(tag + "_skip", ins, [ca.SX(0)])
+    cond = ca.Function.conditional(tag + "_switch", [full], skip)
+    xm = [ca.MX.sym(f"x{i}", *cond.size_in(i)) for i in range(cond.n_in())]
+    return ca.Function(tag, xm, [cond(*xm)], {"never_inline": True})
+
+
+def _velocity_obstacle_reference(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance,
+                                 n_candidates, cone="wide", current_heading=None):
+    """The direct implementation (every candidate against every neighbour, trigonometric tests).
+
+    Used by :func:`velocity_obstacle` for the fallback and the degenerate cases; see it for the semantics.
     """
     t = velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active,
                                 collision_distance=collision_distance, n_candidates=n_candidates, cone=cone,
