@@ -24,18 +24,14 @@ from pathlib import Path
 import numpy as np
 
 from . import colregs
-from .closed_loop import METHODS, S_, Layout, default_globals, initial_state, pack_params
+from .closed_loop import METHODS, PARAM_SOURCES, S_, Layout, default_globals, initial_state, pack_params
 from .errors import InputError, ScenarioError
 from .metrics import tracking_metrics
 from .model import propeller_rpm_for_speed
 from .simulation import Trajectory, simulate
 
-#: scenario ``[settings]`` keys that map onto closed-loop parameters (name in the file -> name in the step)
-PARAM_KEYS = {
-    "k_att": "k_att", "k_rep": "k_rep", "d0": "d0", "lam_sink": "lam_sink", "k_vor": "k_vor", "k_vor0": "k_vor0",
-    "r_tol_vortex": "r_tol_vortex", "wall_lam": "wall_lam", "wall_d_act": "wall_d_act",
-    "ilos_delta": "ilos_delta", "ilos_k": "ilos_k", "kp": "kp", "kd": "kd", "ship_radius": "ship_radius",
-}
+#: scenario ``[settings]`` / ``--params`` keys passed to :func:`~mmg_casadi.closed_loop.default_globals` as they are
+PARAM_KEYS = tuple(k for k in PARAM_SOURCES if k not in ("goal_tolerance", "gamma_max", "r_safe")) + ("ship_radius",)
 LAYOUT_KEYS = ("vo_candidates", "vo_cone")
 STALL_WINDOW = 50.0  #: no progress towards the goal for this long at t_max → "stalled"
 
@@ -126,14 +122,13 @@ def build_problem(sc, params: dict | None = None):
         walls += [(a[0], a[1], b[0], b[1]) for a, b in zip(pts[:-1], pts[1:])]
     layout = Layout(methods=methods, n_obstacles=len(sc.obstacles), n_walls=len(walls), max_path=kmax,
                     **layout_kw)
+    overrides = {k: float(v) for k, v in merged.items() if k in PARAM_KEYS}
+    if "gamma_max_deg" in merged:
+        overrides["gamma_max"] = math.radians(float(merged["gamma_max_deg"]))
+    # every override goes through default_globals, which range-checks it against its parameter dataclass
     g = default_globals(dt=st.dt, r_safe=float(merged.get("r_safe", st.r_safe)),
                         collision_distance=st.collision_distance,
-                        goal_tolerance=getattr(st, "goal_tolerance", 3.0), t_max=st.t_max)
-    for k, v in merged.items():
-        if k in PARAM_KEYS:
-            g[PARAM_KEYS[k]] = float(v)
-        elif k == "gamma_max_deg":
-            g["gamma_max"] = math.radians(float(v))
+                        goal_tolerance=getattr(st, "goal_tolerance", 3.0), t_max=st.t_max, **overrides)
     ships = []
     for s in sc.ships:
         ships.append({"n_rpm": propeller_rpm_for_speed(s.speed), "path": [s.start, *s.waypoints],

@@ -14,7 +14,8 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from .closed_loop import AUX, NS, S_, SHIP_STATE, Layout, build_closed_loop_step, build_guidance
+from .closed_loop import (AUX, GLOBAL_PARAMS, NS, S_, SHIP_STATE, Layout, build_closed_loop_step,
+                          build_guidance)
 from .compiled import compile_function
 
 
@@ -122,7 +123,7 @@ class Trajectory:
 def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200) -> Trajectory:
     """Roll out one scenario until every ship has finished or ``t_max`` (in ``p``) is reached."""
     F = _chunk(layout, chunk, 1)
-    t_max = float(p[list(_global_index()).index("t_max")])
+    t_max = float(p[GLOBAL_PARAMS.index("t_max")])
     xs, auxs = [np.asarray(x0, float)[:, None]], []
     x = np.asarray(x0, float)
     while not _finished(layout, x, t_max)[0]:
@@ -146,12 +147,6 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200)
     return Trajectory(layout, X[0].copy(), states, A)
 
 
-@lru_cache(maxsize=1)
-def _global_index():
-    from .closed_loop import GLOBAL_PARAMS
-    return GLOBAL_PARAMS
-
-
 def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int = 100) -> tuple[np.ndarray, float]:
     """Roll out ``M`` scenarios of one layout together (columns of ``X0`` (nx, M) and ``P`` (np, M)).
 
@@ -161,7 +156,7 @@ def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int 
     P = np.asarray(P, float)
     M = X0.shape[1]
     F = _chunk_final(layout, chunk, M)
-    t_max = P[list(_global_index()).index("t_max")]
+    t_max = P[GLOBAL_PARAMS.index("t_max")]
     x = X0
     busy = 0.0
     while not np.all(_finished(layout, x, t_max)):

@@ -98,3 +98,22 @@ def test_params_file_overrides_field_parameters(tmp_path):
     assert da != pytest.approx(db, abs=1e-3)
     p.write_text("[params]\nwarp = 9\n")
     assert main(["simulate", str(f), "--params", str(p), "--out", str(tmp_path / "c")]) == 2
+
+
+@pytest.mark.parametrize("text,field", [("kd = -1.0", "kd"), ("ilos_delta = 0.0", "ilos_delta"),
+                                        ("lam_sink = 5.0", "lam_sink")])
+def test_out_of_range_field_parameters_in_a_scenario_file_are_rejected(tmp_path, capsys, text, field):
+    f = tmp_path / "bad.toml"
+    f.write_text(f"[settings]\nmethod='modified-vortex'\n{text}\n[[ships]]\nstart=[0,0]\nheading=0\nspeed=1\n"
+                 "waypoints=[[50,0]]\n")
+    out = tmp_path / "out"
+    assert main(["simulate", str(f), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and field in err[0]
+    assert not out.exists()
+
+
+def test_params_file_with_r_safe_as_written_by_tune_apf(tmp_path):
+    p = tmp_path / "params.toml"
+    p.write_text("[params]\nk_vor0 = -20.0\nlam_sink = -150.0\nr_safe = 12.0\n")
+    assert main(["simulate", str(SCENARIOS / "head_on.toml"), "--params", str(p), "--out", str(tmp_path / "a")]) == 0
