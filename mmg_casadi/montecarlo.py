@@ -240,19 +240,17 @@ def run_scenarios(scenarios, *, chunk: int = DEFAULT_CHUNK, time_guidance_calls:
                   stall_window: float = STALL_WINDOW) -> list[dict]:
     """Simulate scenarios together and classify each from its final state.
 
-    Scenarios with the same :class:`Layout` and ``t_max`` are rolled out as one batch (one compiled step, ``map`` over the
+    Scenarios with the same :class:`Layout` are rolled out as one batch (one compiled step, ``map`` over the
     scenarios, ``mapaccum`` over chunks of ``chunk`` steps). Returns one dict per scenario, in order, with the
     columns of :func:`classify` plus ``guidance_call_us`` (``nan`` unless ``time_guidance_calls``).
     """
     from .simulation import simulate_batch
     problems = [build_problem(sc) for sc in scenarios]
-    # one batch per (layout, t_max): simulate_batch stops at the largest t_max of its columns, so a column
-    # with a shorter horizon (frozen at its t_max while still sailing) would never count as finished
-    groups: dict[tuple[Layout, float], list[int]] = {}
-    for i, (layout, _x0, _p, g, _merged) in enumerate(problems):
-        groups.setdefault((layout, float(g["t_max"])), []).append(i)
+    groups: dict[Layout, list[int]] = {}
+    for i, (layout, *_rest) in enumerate(problems):
+        groups.setdefault(layout, []).append(i)
     out: list[dict | None] = [None] * len(problems)
-    for (layout, _t_max), idx in groups.items():
+    for layout, idx in groups.items():
         X0 = np.column_stack([problems[i][1] for i in idx])
         P = np.column_stack([problems[i][2] for i in idx])
         XF, _busy = simulate_batch(layout, X0, P, chunk=chunk)

@@ -275,3 +275,14 @@ def test_one_study_per_output_directory(tmp_path):
         with pytest.raises(InputError) as err:
             run_study(tmp_path, runs=1, envs="1", methods=(METHOD,), workers=1, progress=False)
     assert err.value.field == "--out"
+
+
+def test_scenarios_with_different_horizons_share_a_batch():
+    from mmg_casadi.scenario import scenario_from_dict
+    from mmg_casadi.montecarlo import run_scenarios
+
+    def sc(t_max):
+        return scenario_from_dict({"settings": {"method": "none", "t_max": t_max},
+                                   "ships": [{"start": [0, 0], "heading": 0, "speed": 1, "waypoints": [[60, 0]]}]})
+    short, long_ = run_scenarios([sc(10.0), sc(100.0)])
+    assert short["failure"] == "timeout" and long_["success"]

@@ -131,109 +131,12 @@ def test_parameter_validation():
 
 
 # ---------------------------------------------------------------------------------------------------------------
-# Equivalence with the original (direct, trigonometric) implementation, copied verbatim below as a reference.
+# Equivalence with the direct (trigonometric) implementation that the module keeps for its fallback
 # ---------------------------------------------------------------------------------------------------------------
 
-from mmg_casadi.fields import R_MIN, _col2, _matrix, _row  # noqa: E402
-from mmg_casadi.guidance import wrap_angle  # noqa: E402
-from mmg_casadi.velocity_obstacle import _BIG, _PEN_TOL, TIE_EPS, _check_structure  # noqa: E402
-
-
-def _half_angle(d, collision_distance, cone):
-    """Half-angle of the collision cone of a neighbour at distance ``d``."""
-    ratio = collision_distance / d
-    if cone == "huang":
-        return ca.asin(ca.fmin(1, ratio))
-    return ca.fmin(ca.pi / 2, 2 * ca.atan(ratio))
-
-
-def _reference_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance,
-                            n_candidates, cone="wide", current_heading=None):
-    """Candidate headings and their feasibility, penetration and goal cost.
-
-    Returns a dict: ``headings`` (1×n, θ_j), ``forbidden`` (M×n, 1 where neighbour i forbids candidate j),
-    ``feasible`` (1×n), ``penetration`` (1×n, max_i (α_i − angle_ij) over the neighbours forbidding j, −π when
-    none does), ``cost`` (1×n, |wrap(θ_j − θ_goal)| plus the tie-break term), ``half_angle`` (1×M, α_i) and
-    ``goal_heading`` (θ_goal).
-
-    Examples
-    --------
-    >>> import casadi as ca
-    >>> t = _reference_terms([0, 0], 1.0, [50, 0], ca.DM([[10], [0]]), ca.DM.zeros(2, 1), [1],
-    ...                             collision_distance=2.0, n_candidates=8, cone="huang")
-    >>> t["forbidden"]  # candidates at -180, -135, ..., 135 deg; only 0 deg points into the cone
-    DM([[0, 0, 0, 0, 1, 0, 0, 0]])
-    """
-    _check_structure(n_candidates, cone)
-    own_pos, goal, nb_pos, nb_vel = _col2(own_pos), _col2(goal), _matrix(nb_pos, 2), _matrix(nb_vel, 2)
-    m, n = nb_pos.size2(), int(n_candidates)
-    active = _row(active, m)
-    theta = -math.pi + 2 * math.pi * np.arange(n) / n
-    headings = ca.DM(theta.reshape(1, n))
-    v_cand = own_speed * ca.DM(np.vstack([np.cos(theta), np.sin(theta)]))
-    forbidden, penetration, halves = [], ca.DM.ones(1, n) * -math.pi, []
-    for i in range(m):
-        los = nb_pos[:, i] - own_pos
-        half = _half_angle(ca.fmax(ca.norm_2(los), R_MIN), collision_distance, cone)
-        w = v_cand - ca.repmat(nb_vel[:, i], 1, n)  # relative velocity: apex shifted by the neighbour's velocity
-        dot = los[0] * w[0, :] + los[1] * w[1, :]
-        cross = los[0] * w[1, :] - los[1] * w[0, :]
-        angle = ca.atan2(ca.fabs(cross), dot)
-        forb = active[i] * (ca.sum1(w * w) > 1e-12) * (angle < half)
-        penetration = ca.fmax(penetration, forb * (half - angle) + (1 - forb) * -math.pi)
-        forbidden.append(forb)
-        halves.append(half)
-    forbidden = ca.vertcat(*forbidden) if m else ca.DM.zeros(0, n)
-    feasible = ca.DM.ones(1, n)
-    for i in range(m):
-        feasible = feasible * (1 - forbidden[i, :])
-    goal_heading = ca.atan2(goal[1] - own_pos[1], goal[0] - own_pos[0])
-    off_goal = wrap_angle(headings - goal_heading)
-    if current_heading is None:
-        tie = off_goal < 0  # prefer starboard of the goal direction
-    else:
-        tie = ca.fabs(wrap_angle(headings - current_heading)) / ca.pi
-    return {
-        "headings": headings,
-        "forbidden": forbidden,
-        "feasible": feasible,
-        "penetration": penetration,
-        "cost": ca.fabs(off_goal) + TIE_EPS * tie,
-        "half_angle": ca.horzcat(*halves) if m else ca.DM.zeros(1, 0),
-        "goal_heading": goal_heading,
-    }
-
-
-def _reference_velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance, n_candidates,
-                      cone="wide", current_heading=None):
-    """Desired heading ψ_d (rad, (−π, π]) chosen by the constant-speed linear velocity obstacle.
-
-    The feasible candidate with the smallest goal cost wins (strict <, so the first minimum in candidate order
-    wins exact ties); with no feasible candidate, the one with the smallest penetration (see the module notes).
-
-    Examples
-    --------
-    >>> import casadi as ca
-    >>> psi = _reference_velocity_obstacle([0, 0], 1.0, [50, 0], ca.DM([[10], [0]]), ca.DM.zeros(2, 1), [1],
-    ...                         collision_distance=2.0, n_candidates=80, cone="wide")
-    >>> round(float(psi) * 180 / ca.pi, 6)  # 22.5 deg is still inside the 22.6 deg cone: turn 27 deg to starboard
-    27.0
-    """
-    t = _reference_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active,
-                                collision_distance=collision_distance, n_candidates=n_candidates, cone=cone,
-                                current_heading=current_heading)
-    headings, feasible, cost, pen = t["headings"], t["feasible"], t["cost"], t["penetration"]
-    best_c, best_th = _BIG, t["goal_heading"]
-    fb_p, fb_c, fb_th = _BIG, _BIG, t["goal_heading"]
-    for j in range(headings.size2()):
-        better = feasible[j] * (cost[j] < best_c)
-        best_c = ca.if_else(better, cost[j], best_c)
-        best_th = ca.if_else(better, headings[j], best_th)
-        fb_better = (pen[j] < fb_p - _PEN_TOL) + (ca.fabs(pen[j] - fb_p) <= _PEN_TOL) * (cost[j] < fb_c)
-        fb_p = ca.if_else(fb_better, pen[j], fb_p)
-        fb_c = ca.if_else(fb_better, cost[j], fb_c)
-        fb_th = ca.if_else(fb_better, headings[j], fb_th)
-    return wrap_angle(ca.if_else(best_c < _BIG / 2, best_th, fb_th))
+from mmg_casadi.velocity_obstacle import (  # noqa: E402
+    _velocity_obstacle_reference as _reference_velocity_obstacle,
+)
 
 
 def _vo_functions(impl, m, cone, with_heading):
