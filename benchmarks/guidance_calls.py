@@ -22,11 +22,12 @@ import time
 import numpy as np
 
 from mmg_casadi.closed_loop import Layout, default_globals, initial_state, pack_params
+from mmg_casadi.methods import AVOIDING
 from mmg_casadi.model import propeller_rpm_for_speed
 from mmg_casadi.montecarlo import time_guidance
 from mmg_casadi.simulation import compiled_guidance
 
-METHODS = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle")
+METHODS = AVOIDING
 
 
 def states(layout: Layout, columns: int, seed: int = 0):

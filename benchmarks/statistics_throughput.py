@@ -53,7 +53,7 @@ def main(argv=None) -> int:
     rates, success, busy = {}, {}, {}
     for e, m in cells:
         # warm-up: same batch size (builds the batched Function), one chunk of steps only
-        run_batch(e, m, range(WARMUP_RUNS_OFFSET, WARMUP_RUNS_OFFSET + a.runs), a.seed, t_max=0.25 * a.chunk,
+        run_batch(e, m, range(WARMUP_RUNS_OFFSET, WARMUP_RUNS_OFFSET + a.runs), a.seed, params={"t_max": 0.25 * a.chunk},
                   chunk=a.chunk)
         t = time.perf_counter()
         rows = run_batch(e, m, range(a.runs), a.seed, chunk=a.chunk)

@@ -1,0 +1,31 @@
+"""mmg-casadi: the KCS MMG manoeuvring model and its collision-avoidance guidance, written in CasADi.
+
+The flat public API::
+
+    import mmg_casadi as mc
+    r = mc.run_scenario("head_on.toml", params={"k_vor0": -15})
+    r.metrics, r.plot(), r.to_frame(), r.save("out")
+
+Examples
+--------
+>>> import mmg_casadi as mc
+>>> mc.PARAMETERS["kp"].default, "modified-vortex" in mc.METHODS
+(3.5, True)
+"""
+
+from .closed_loop import ClosedLoopModel, Layout, Problem, build_problem
+from .maneuvers import turning_circle, zigzag
+from .methods import METHODS
+from .model import linearise
+from .montecarlo import run_study
+from .params import PARAMETERS, load_file as load_params, resolve as resolve_params
+from .scenario import Scenario, load_scenario
+from .scenario_run import ScenarioResult, packaged_scenario, run_scenario
+from .simulation import Trajectory, simulate
+
+__all__ = [
+    "ClosedLoopModel", "Layout", "METHODS", "PARAMETERS", "Problem", "Scenario", "ScenarioResult", "Trajectory",
+    "build_problem", "linearise", "load_params", "load_scenario", "packaged_scenario", "resolve_params",
+    "run_scenario", "run_study", "simulate", "turning_circle", "zigzag",
+]
+__version__ = "0.2.0"

@@ -1,20 +1,37 @@
 """Command-line interface ``mmg-casadi`` (thin: parse, validate, call the library, write results).
 
-Bad input (unknown command, value out of range, malformed scenario file) prints one line naming the field and
-the allowed values and exits with status 2; nothing is written in that case.
+The only module that knows argparse, flags, the studies and the tuning. Every command that runs the closed loop
+takes the same parameter options: ``--params FILE`` (a TOML file of parameters, e.g. from ``tune apf``) and
+``--set NAME=VALUE`` (repeatable, wins over the file); ``mmg-casadi params`` lists them.
+
+Bad input (unknown command or option, value out of range, malformed scenario or parameter file) prints one line
+naming the field and the allowed values and exits with status 2; nothing is written in that case. An option the
+chosen command does not use is refused the same way.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
+import tomllib
 from pathlib import Path
 
+from . import methods as registry
 from .errors import InputError
+from .io import write_json
+from .params import PARAMETERS, check_value, help_text, load_file, markdown_table
 
-STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel", "statistics", "all")
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
+STUDIES = QUICK_STUDIES + ("statistics", "all")
+_FLAGS = {"base_seed": "--seed", "out_dir": "--out"}
+"""Library argument names whose flag is not ``--`` + the name with dashes."""
+
+
+class _CliError(InputError):
+    def __str__(self):
+        return f"{self.field}: {self.allowed}"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -24,93 +41,118 @@ class _Parser(argparse.ArgumentParser):
         raise _CliError(self.prog, message)
 
 
-class _CliError(InputError):
-    def __str__(self):
-        return f"{self.field}: {self.allowed}"
+def _float(s):
+    try:
+        return float(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {s!r}") from None
 
 
-def _float(field):
-    def conv(s):
-        try:
-            return float(s)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a number, got {s!r}") from None
-    return conv
+def _int(s):
+    try:
+        return int(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {s!r}") from None
 
 
 def _methods(s):
-    from .closed_loop import METHODS
-    out = tuple(m.strip() for m in s.split(",") if m.strip())
-    for m in out:
-        if m not in METHODS:
-            raise InputError("--methods", f"a comma-separated list of: {', '.join(METHODS)}", m)
-    return out
+    return registry.parse_list(s, "--methods")
 
 
-def write_json(path: Path, obj) -> None:
-    """Write ``obj`` as JSON atomically (temporary file, then rename)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(obj, indent=2, default=_json_default))
-    tmp.replace(path)
+def _setting(s: str) -> tuple[str, object]:
+    """``NAME=VALUE`` of ``--set``: VALUE read as a TOML value (bare words are strings)."""
+    name, sep, text = s.partition("=")
+    name = name.strip()
+    if not sep or not name:
+        raise InputError("--set", "NAME=VALUE with NAME a parameter (see `mmg-casadi params`)", s)
+    try:
+        value = tomllib.loads(f"v = {text.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = text.strip()
+    return name, check_value(name, value, field=f"--set {name}", cls=InputError)
 
 
-def _json_default(o):
-    import numpy as np
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, np.bool_):
-        return bool(o)
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    raise TypeError(f"not JSON serialisable: {type(o)}")
+def _add_params(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--params", type=Path, help="TOML file of parameters (e.g. params.toml from `tune apf`); "
+                   "see `mmg-casadi params`")
+    p.add_argument("--set", dest="settings", action="append", default=[], metavar="NAME=VALUE",
+                   help="one parameter (repeatable; wins over --params), e.g. --set r_safe=10")
+
+
+def _add_methods(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.NAMES)} "
+                   "(default: those the study compares)")
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``mmg-casadi`` argument parser (one sub-parser per command, study and tuning)."""
     p = _Parser(prog="mmg-casadi", description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="{maneuver,simulate,study,tune}")
+    sub = p.add_subparsers(dest="command", parser_class=_Parser,
+                           metavar="{maneuver,simulate,study,tune,params}")
     sub.required = True
 
     m = sub.add_parser("maneuver", help="standard manoeuvres: turning circle, zig-zag")
     m.add_argument("kind", help="turning | zigzag")
-    m.add_argument("--rudder", type=_float("--rudder"), default=35.0, help="turning rudder angle [deg], (0, 35]")
+    m.add_argument("--rudder", type=_float, default=35.0, help="turning rudder angle [deg], (0, 35]")
     m.add_argument("--port", action="store_true", help="turn to port (default starboard)")
-    m.add_argument("--angle", type=_float("--angle"), default=10.0, help="zig-zag angle [deg], (0, 35]")
-    m.add_argument("--speed", type=_float("--speed"), default=1.0, help="approach speed / design speed, [0.2, 1.2]")
+    m.add_argument("--angle", type=_float, default=10.0, help="zig-zag angle [deg], (0, 35]")
+    m.add_argument("--speed", type=_float, default=1.0, help="approach speed / design speed, [0.2, 1.2]")
     m.add_argument("--out", type=Path, required=True, help="output directory")
 
     s = sub.add_parser("simulate", help="run a scenario file")
     s.add_argument("file", type=Path, help="scenario TOML file")
-    s.add_argument("--method", help="override settings.method")
-    s.add_argument("--params", type=Path, help="TOML file of field parameters (e.g. from `tune apf`)")
-    s.add_argument("--out", type=Path, required=True)
+    s.add_argument("--method", help=f"override settings.method: {', '.join(registry.NAMES)}")
+    _add_params(s)
+    s.add_argument("--out", type=Path, required=True, help="output directory")
 
     st = sub.add_parser("study", help="the paper's studies")
-    st.add_argument("name", help=" | ".join(STUDIES))
-    st.add_argument("--out", type=Path, required=True)
-    st.add_argument("--params", type=Path, help="TOML file of field parameters (e.g. from `tune apf`)")
-    st.add_argument("--methods", type=_methods, help="comma-separated methods (default: all the study compares)")
-    st.add_argument("--runs", type=int, default=200, help="statistics: runs per environment and method")
-    st.add_argument("--envs", default="1-5", help="statistics: environments, e.g. 1-5 or 1,3")
-    st.add_argument("--seed", type=int, default=0, help="statistics: base seed")
-    st.add_argument("--backend", default="local", help="statistics: local | ray")
-    st.add_argument("--address", default=None, help="statistics: Ray cluster address")
-    st.add_argument("--workers", type=int, default=None, help="statistics: local worker processes")
-    st.add_argument("--ilos-delta", type=_float("--ilos-delta"), default=None, help="waypoint-square: Δ [L]")
-    st.add_argument("--ilos-k", type=_float("--ilos-k"), default=None, help="waypoint-square: k")
-    st.add_argument("--kp", type=_float("--kp"), default=None, help="waypoint-square: PD K_p")
-    st.add_argument("--kd", type=_float("--kd"), default=None, help="waypoint-square: PD K_d")
+    studies = st.add_subparsers(dest="study", parser_class=_Parser, metavar="{" + ",".join(STUDIES) + "}")
+    studies.required = True
+    for name in STUDIES:
+        sp = studies.add_parser(name, help=f"the {name} study" if name != "all" else "every quick study")
+        sp.add_argument("--out", type=Path, required=True, help="output directory")
+        _add_params(sp)
+        if name not in ("waypoint-square", "all"):
+            _add_methods(sp)
+        if name == "waypoint-square":
+            for flag, key in (("--ilos-delta", "ilos_delta"), ("--ilos-k", "ilos_k"), ("--kp", "kp"),
+                              ("--kd", "kd")):
+                sp.add_argument(flag, type=_float, dest=key, help=f"same as --set {key}=VALUE")
+        if name == "statistics":
+            sp.add_argument("--runs", type=_int, default=200, help="runs per environment and method")
+            sp.add_argument("--envs", default="1-5", help="environments, e.g. 1-5 or 1,3")
+            sp.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
+            sp.add_argument("--backend", default="local", help="local | ray")
+            sp.add_argument("--address", default=None, help="Ray cluster address (with --backend ray)")
+            sp.add_argument("--workers", type=_int, default=None, help="local worker processes / Ray CPUs")
 
     t = sub.add_parser("tune", help="controller and field tuning")
-    t.add_argument("what", help="pd | apf")
-    t.add_argument("--speed", type=_float("--speed"), default=1.0)
-    t.add_argument("--zeta", type=_float("--zeta"), default=None)
-    t.add_argument("--wn", type=_float("--wn"), default=None)
-    t.add_argument("--train", type=int, default=8)
-    t.add_argument("--holdout", type=int, default=40)
-    t.add_argument("--out", type=Path, required=True)
+    tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf}")
+    tunes.required = True
+    tp = tunes.add_parser("pd", help="PD heading-gain design (pole placement on the linearised model)")
+    tp.add_argument("--speed", type=_float, default=1.0, help="speed / design speed, [0.2, 1.2]")
+    tp.add_argument("--zeta", type=_float, default=None, help="damping ratio (default 0.8)")
+    tp.add_argument("--wn", type=_float, default=None, help="natural frequency [U/L] (default: from the gear)")
+    tp.add_argument("--out", type=Path, required=True, help="output directory")
+    ta = tunes.add_parser("apf", help="gradient-based tuning of the modified sink-vortex field")
+    ta.add_argument("--train", type=_int, default=8, help="sampled training scenarios (plus the paper's five)")
+    ta.add_argument("--holdout", type=_int, default=40, help="held-out scenarios per environment")
+    _add_params(ta)
+    ta.add_argument("--out", type=Path, required=True, help="output directory")
+
+    pp = sub.add_parser("params", help="list every parameter (default, allowed values, unit, meaning, source)")
+    pp.add_argument("--markdown", action="store_true", help="as a Markdown table")
     return p
+
+
+def _params_of(a) -> dict | None:
+    """Parameters from ``--params`` and ``--set`` (and the waypoint-square gain flags), later ones winning."""
+    out = dict(load_file(a.params)) if getattr(a, "params", None) else {}
+    for key in ("ilos_delta", "ilos_k", "kp", "kd"):
+        if getattr(a, key, None) is not None and getattr(a, "study", None) == "waypoint-square":
+            out[key] = check_value(key, getattr(a, key), field="--" + key.replace("_", "-"), cls=InputError)
+    out.update(dict(_setting(s) for s in getattr(a, "settings", [])))
+    return out or None
 
 
 def _maneuver(a) -> dict:
@@ -126,55 +168,85 @@ def _maneuver(a) -> dict:
     a.out.mkdir(parents=True, exist_ok=True)
     plot_maneuver(r, a.out / f"{name}.png")
     write_json(a.out / "metrics.json", r.metrics)
+    print(json.dumps({k: v for k, v in r.metrics.items() if not isinstance(v, dict)}, indent=1))
     return r.metrics
 
 
 def _simulate(a) -> dict:
     from .scenario import load_scenario, with_method
-    from .scenario_run import load_params_file, run_scenario, write_outputs
+    from .scenario_run import run_scenario
     sc = load_scenario(a.file)
     if a.method:
         sc = with_method(sc, a.method)
-    params = load_params_file(a.params) if a.params else None
-    res = run_scenario(sc, params=params)
-    write_outputs(res, a.out)
+    res = run_scenario(sc, params=_params_of(a))
+    res.save(a.out)
     return res.metrics
 
 
 def _study(a) -> dict:
-    import importlib
-    if a.name not in STUDIES:
-        raise InputError("study", f"one of: {', '.join(STUDIES)}", a.name)
-    names = QUICK_STUDIES if a.name == "all" else (a.name,)
+    params = _params_of(a)
+    names = QUICK_STUDIES if a.study == "all" else (a.study,)
     out = {}
     for n in names:
         mod = importlib.import_module(f"studies.{n.replace('-', '_')}")
-        target = a.out / n if a.name == "all" else a.out
-        if a.name == "all":
+        target = a.out / n if a.study == "all" else a.out
+        if a.study == "all":
             print(f"study {n} -> {target}", file=sys.stderr)
-        out[n] = mod.run(a, target)
+        kw = {"params": params}
+        if n != "waypoint-square" and getattr(a, "methods", None):
+            kw["methods"] = a.methods
+        if n == "statistics":
+            kw.update(runs=a.runs, envs=a.envs, base_seed=a.seed, backend=a.backend, address=a.address,
+                      workers=a.workers)
+        out[n] = mod.run(target, **kw)
     return out
 
 
 def _tune(a) -> dict:
-    import importlib
-    if a.what not in ("pd", "apf"):
-        raise InputError("tune", "one of: pd, apf", a.what)
-    return importlib.import_module(f"tuning.cli_{a.what}").run(a)
+    if a.what == "pd":
+        from tuning import cli_pd
+        return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn)
+    from tuning import cli_apf
+    return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a))
+
+
+def _params(a) -> dict:
+    print(markdown_table() if a.markdown else help_text())
+    return {n: p.default for n, p in PARAMETERS.items()}
+
+
+def _flag(field: str, a) -> str:
+    """The command-line name of a library argument the parsed command took, else ``field`` as it is."""
+    if field in _FLAGS:
+        return _FLAGS[field]
+    dest = field.split(".")[0]
+    return "--" + dest.replace("_", "-") if dest in vars(a) and dest not in ("params", "settings") else field
 
 
 def main(argv=None) -> int:
+    """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    parser = build_parser()
+    a = None
     try:
-        a = build_parser().parse_args(argv)
-        result = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune}[a.command](a)
+        a, extra = parser.parse_known_args(argv)
+        if extra:
+            prog = "mmg-casadi " + " ".join(x for x in (a.command, getattr(a, "study", None),
+                                                         getattr(a, "what", None)) if x)
+            raise InputError(extra[0], f"an option of '{prog}' (see '{prog} --help')")
+        handlers = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
+                    "params": _params}
+        handlers[a.command](a)
+    except _CliError as e:
+        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        return 2
     except InputError as e:
+        if a is not None and not isinstance(e, _CliError):
+            e = InputError(_flag(e.field, a), e.allowed, e.got)
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("mmg-casadi: interrupted (finished results are kept; rerun to resume)", file=sys.stderr)
         return 130
-    if isinstance(result, dict) and a.command == "maneuver":
-        print(json.dumps({k: v for k, v in result.items() if not isinstance(v, dict)}, indent=1))
     return 0
 
 

@@ -13,21 +13,21 @@ Layout of the scenario state (one column): ``[t, ship_0 (NS rows), ship_1, ...]`
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 
-from . import fields, velocity_obstacle
-from .control import PdHeadingParams, pd_heading
-from .errors import ParameterError, check_range
-from .fields import InverseSquareParams, ModifiedVortexParams, SinkVortexParams, WallParams
-from .guidance import IlosParams, ilos_step_terms, switch_waypoint, validate_waypoints
-from .model import NX, build_mmg, rk4
+from . import fields, methods
+from .control import pd_heading
+from .errors import ParameterError, ScenarioError
+from .guidance import ilos_step_terms, switch_waypoint, validate_waypoints
+from .methods import GuidanceInputs
+from .model import NX, build_mmg, propeller_rpm_for_speed, rk4
+from .params import PARAMETERS, resolve
 from .ship import ShipParams, SteeringParams, load_kcs, load_steering
-
-METHODS = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle", "none")
 
 SHIP_STATE = (
     "u", "v", "r", "x", "y", "psi", "delta",  # MMG state
@@ -58,6 +58,9 @@ GLOBAL_PARAMS = (
     "k_att", "k_rep", "d0", "lam_sink", "k_vor", "k_vor0", "r_tol_vortex", "gamma_max",
     "wall_lam", "wall_d_act", "ship_radius", "t_max",
 )
+"""Numeric inputs of the compiled step, in order: the table's parameters (:mod:`mmg_casadi.params`) with the
+angles ``delta_max`` and ``gamma_max`` in rad (the table holds them in degrees); see :func:`step_values`."""
+_DEG_INPUTS = {"delta_max": "delta_max_deg", "gamma_max": "gamma_max_deg"}
 SHIP_PARAMS = ("n_rpm", "n_path", "stays")
 
 ENVELOPE = {"speed": 3.0, "r": 5.0, "position": 1.0e4}
@@ -70,7 +73,8 @@ class Layout:
     Parameters
     ----------
     methods : tuple of str
-        Guidance method of each ship (one of :data:`METHODS`); the first ship is the own ship.
+        Guidance method of each ship (a name in :data:`mmg_casadi.methods.METHODS`); the first ship is the own
+        ship.
     n_obstacles, n_walls : int
         Static circular obstacles and straight wall segments.
     max_path : int
@@ -88,8 +92,8 @@ class Layout:
     n_obstacles: int = 0
     n_walls: int = 0
     max_path: int = 2
-    vo_candidates: int = 80
-    vo_cone: str = "wide"
+    vo_candidates: int = PARAMETERS["vo_candidates"].default
+    vo_cone: str = PARAMETERS["vo_cone"].default
     smooth: float | None = None
 
     @property
@@ -120,7 +124,13 @@ class Layout:
         return f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}{s}"
 
     def split_params(self, p):
-        """Split a parameter vector (symbolic or numeric) into named pieces."""
+        """Split a parameter vector (symbolic or numeric) into named pieces.
+
+        Parameters
+        ----------
+        p : SX, MX, DM or ndarray
+            A parameter vector of this layout (:attr:`np` rows).
+        """
         out = {}
         i = 0
         for name in GLOBAL_PARAMS:
@@ -248,7 +258,8 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
             active = ca.SX(1, 0)
 
         psi_ilos = terms["psi_d"]
-        if method == "none" or (M == 0 and W == 0):
+        spec = methods.get(method, f"methods[{i}]")
+        if spec.builder is None or (M == 0 and W == 0):
             psi_d = psi_ilos
             w_react = ca.SX(0)
         else:
@@ -264,25 +275,11 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
                                                 d_act=P["wall_d_act"])
                 near_wall = _indicator(ca.sumsqr(wall_vec) - 1e-12, sm)
             w_react = ca.fmax(any_active, near_wall) if sm is None else 1 - (1 - any_active) * (1 - near_wall)
-            if method == "velocity-obstacle":
-                speed = ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2)
-                psi_vo = velocity_obstacle.velocity_obstacle(
-                    pos[i], speed, goal, nb_pos, nb_vel, active, collision_distance=P["collision_distance"],
-                    n_candidates=layout.vo_candidates, cone=layout.vo_cone)
-                field_vec = ca.vertcat(ca.cos(psi_vo), ca.sin(psi_vo)) + wall_vec
-            elif method == "inverse-square":
-                field_vec = fields.inverse_square(pos[i], goal, nb_pos, nb_rad, active, k_att=P["k_att"],
-                                                  k_rep=P["k_rep"], d0=P["d0"]) + wall_vec
-            elif method == "sink-vortex":
-                field_vec = fields.sink_vortex(pos[i], goal, nb_pos, active, lam_sink=P["lam_sink"],
-                                               k_vor=P["k_vor"]) + wall_vec
-            elif method == "modified-vortex":
-                field_vec = fields.modified_vortex(
-                    pos[i], psi[i], vel[i], goal, nb_pos, nb_vel, active, lam_sink=P["lam_sink"],
-                    k_vor0=P["k_vor0"], r_safe=P["r_safe"], r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"],
-                    smooth=sm) + wall_vec
-            else:
-                raise ValueError(f"unknown method {method!r}; allowed: {', '.join(METHODS)}")
+            inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i],
+                                    speed=ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2), goal=goal,
+                                    nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=active, P=P,
+                                    layout=layout)
+            field_vec = spec.builder(inputs) + wall_vec
             if sm is None:
                 psi_d = ca.if_else(w_react, ca.atan2(field_vec[1], field_vec[0]), psi_ilos)
             else:
@@ -374,25 +371,24 @@ def ship_rows(layout: Layout, X: np.ndarray) -> np.ndarray:
     return X[1:, :].T.reshape(X.shape[1], layout.n_ships, NS)
 
 
-#: closed-loop parameter -> (parameter dataclass, its field); defaults and range checks live in the dataclasses
-PARAM_SOURCES = {
-    "goal_tolerance": (IlosParams, "r_tol"), "ilos_delta": (IlosParams, "delta"), "ilos_k": (IlosParams, "k"),
-    "kp": (PdHeadingParams, "kp"), "kd": (PdHeadingParams, "kd"),
-    "k_att": (InverseSquareParams, "k_att"), "k_rep": (InverseSquareParams, "k_rep"),
-    "d0": (InverseSquareParams, "d0"),
-    "lam_sink": (ModifiedVortexParams, "lam_sink"), "k_vor": (SinkVortexParams, "k_vor"),
-    "k_vor0": (ModifiedVortexParams, "k_vor0"), "r_safe": (ModifiedVortexParams, "r_safe"),
-    "r_tol_vortex": (ModifiedVortexParams, "r_tol"), "gamma_max": (ModifiedVortexParams, "gamma_max"),
-    "wall_lam": (WallParams, "lam"), "wall_d_act": (WallParams, "d_act"),
-}
-OTHER_DEFAULTS = {"dt": 0.25, "collision_distance": 2.0, "ship_radius": 0.5, "t_max": 300.0}
+def step_values(resolved: dict) -> dict:
+    """The step's numeric inputs (:data:`GLOBAL_PARAMS`) from a resolved parameter set (degrees to rad).
+
+    Examples
+    --------
+    >>> g = step_values(resolve())
+    >>> round(g["gamma_max"], 6), g["kp"]
+    (1.963495, 3.5)
+    """
+    out = {}
+    for name in GLOBAL_PARAMS:
+        src = _DEG_INPUTS.get(name)
+        out[name] = math.radians(float(resolved[src])) if src else float(resolved[name])
+    return out
 
 
 def default_globals(**overrides) -> dict:
-    """The paper's parameters (lengths in L, angles in rad) for :func:`pack_params`, with ``overrides``.
-
-    Values are range-checked by the parameter dataclasses they come from; a bad value raises
-    :class:`~mmg_casadi.errors.ParameterError` naming the closed-loop parameter.
+    """The step's numeric inputs for the table's defaults updated with ``overrides`` (table names), checked.
 
     Examples
     --------
@@ -404,18 +400,253 @@ def default_globals(**overrides) -> dict:
     ...
     mmg_casadi.errors.ParameterError: ilos_delta: expected a number in (0, inf) L, got -1.0
     """
-    unknown = set(overrides) - set(PARAM_SOURCES) - set(OTHER_DEFAULTS) - {"delta_max"}
-    if unknown:
-        raise ParameterError(sorted(unknown)[0], f"one of: {', '.join(sorted(set(PARAM_SOURCES) | set(OTHER_DEFAULTS)))}")
-    g = {}
-    for name, (cls, attr) in PARAM_SOURCES.items():
-        value = overrides.get(name, getattr(cls(), attr))
-        try:
-            cls(**{attr: value})
-        except ParameterError as e:
-            raise ParameterError(name, e.allowed, e.got) from None
-        g[name] = float(value)
-    g["delta_max"] = float(overrides.get("delta_max", PdHeadingParams().delta_max))
-    for name, default in OTHER_DEFAULTS.items():
-        g[name] = float(check_range(name, overrides.get(name, default), 0.0, None, low_open=True))
-    return g
+    return step_values(resolve(overrides))
+
+
+OUTCOMES = ("reached", "diverged", "stalled", "timeout")
+"""A ship's outcome: reached its goal, left the model envelope, made no progress (``stall_window``), or none."""
+
+
+def ship_outcome(row, t_end: float, stall_window: float) -> tuple[str, tuple[float, float] | None]:
+    """Outcome of one ship from its final state row (:data:`SHIP_STATE`) — the one judgement every runner uses.
+
+    Returns the outcome (one of :data:`OUTCOMES`) and, for ``"stalled"``, the position closest to the goal.
+
+    Examples
+    --------
+    >>> row = np.zeros(NS); row[S_["status"]] = 1
+    >>> ship_outcome(row, 80.0, 50.0)
+    ('reached', None)
+    >>> row[S_["status"]] = 0; row[S_["t_best"]] = 20.0; row[S_["x_best"]] = 3.0
+    >>> ship_outcome(row, 300.0, 50.0)
+    ('stalled', (3.0, 0.0))
+    """
+    status = row[S_["status"]]
+    if status == 1:
+        return "reached", None
+    if status == 2:
+        return "diverged", None
+    if t_end - row[S_["t_best"]] >= stall_window:
+        return "stalled", (float(row[S_["x_best"]]), float(row[S_["y_best"]]))
+    return "timeout", None
+
+
+def voyage_metrics(rows: np.ndarray, t_end: float, delta_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """CE and MCTE of every ship from final state rows ``(N, NS)`` — the one definition every runner uses.
+
+    ``CE = ∫|δ| dt / (δ_max T)`` (eq. (controller_effort_equation)) and ``MCTE = ∫|y_e| dt / T`` (eq.
+    (crosstrack_metric_equation)) with the integrals accumulated by the compiled step while the ship sails
+    (trapezoidal in δ, the cross-track error sampled at each step's start) and ``T`` the time to goal, or the
+    end time for a ship still sailing; ``nan`` for a diverged ship (its voyage time is not in the state).
+
+    Examples
+    --------
+    >>> rows = np.zeros((1, NS)); rows[0, S_["status"]] = 1; rows[0, S_["t_goal"]] = 10.0
+    >>> rows[0, S_["ce_int"]] = 1.0; rows[0, S_["mcte_int"]] = 5.0
+    >>> ce, mcte = voyage_metrics(rows, 10.0, 0.5)
+    >>> float(ce[0]), float(mcte[0])
+    (0.2, 0.5)
+    """
+    rows = np.atleast_2d(np.asarray(rows, float))
+    status = rows[:, S_["status"]]
+    T = np.where(status == 1, rows[:, S_["t_goal"]], np.where(status == 0, t_end, np.nan))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        T = np.where(T > 0, T, np.nan)
+        return rows[:, S_["ce_int"]] / (delta_max * T), rows[:, S_["mcte_int"]] / T
+
+
+@dataclass(frozen=True)
+class ClosedLoopModel:
+    """The closed loop of one scenario shape, declared once and consumed by simulation, Monte Carlo and tuning.
+
+    Parameters
+    ----------
+    layout : Layout
+        Ships' methods, obstacles, walls, path length and the structural parameters.
+    params : dict
+        The resolved parameter set (every entry of :data:`mmg_casadi.params.PARAMETERS`).
+
+    Examples
+    --------
+    >>> m = ClosedLoopModel(Layout(("none",)), resolve())
+    >>> m.values["kp"], m.layout.nx == 1 + NS
+    (3.5, True)
+    """
+
+    layout: Layout
+    params: dict = field(hash=False, compare=False)
+
+    @property
+    def values(self) -> dict:
+        """The step's numeric inputs by name (:func:`step_values`)."""
+        return step_values(self.params)
+
+    def step(self, *, smooth: float | None = None) -> ca.Function:
+        """The exact or smoothed symbolic step ``(x, p) -> (x_next, aux)``.
+
+        Parameters
+        ----------
+        smooth : float, optional
+            ``None`` for the exact switching logic, else the sigmoid sharpness of the smoothed step (tuning).
+        """
+        lay = self.layout if smooth is None else dataclasses.replace(self.layout, smooth=float(smooth))
+        return build_closed_loop_step(lay)
+
+    def compiled_step(self) -> ca.Function:
+        """The natively compiled exact step (cached on disk)."""
+        from .compiled import compile_function
+        return compile_function(self.step())
+
+    def pack(self, ships: list[dict], obstacles=(), walls=()) -> np.ndarray:
+        """Numeric parameter vector (:func:`pack_params`) with this model's parameter values.
+
+        Parameters
+        ----------
+        ships : list of dict
+            Per ship ``n_rpm``, ``path`` (start then waypoints) and ``stays``.
+        obstacles : sequence of (x, y, radius)
+            Static obstacles.
+        walls : sequence of (ax, ay, bx, by)
+            Wall segments.
+        """
+        return pack_params(self.layout, self.values, ships, obstacles, walls)
+
+    def initial_state(self, ships: list[dict]) -> np.ndarray:
+        """Scenario state at t = 0 (:func:`initial_state`).
+
+        Parameters
+        ----------
+        ships : list of dict
+            Per ship ``start``, ``heading`` (rad), ``speed`` and ``path``.
+        """
+        return initial_state(self.layout, ships)
+
+    def ship_rows(self, X) -> np.ndarray:
+        """Ship rows of scenario states: ``(N, NS)`` for one state, ``(T, N, NS)`` for columns ``(nx, T)``.
+
+        Parameters
+        ----------
+        X : ndarray
+            One scenario state ``(nx,)`` or states as columns ``(nx, T)``.
+        """
+        return ship_rows(self.layout, X)
+
+    def state(self, x, name: str, ship: int | None = None):
+        """One state variable of every ship (or of ``ship``) in the state(s) ``x``.
+
+        Parameters
+        ----------
+        x : ndarray
+            One scenario state ``(nx,)`` or states as columns ``(nx, T)``.
+        name : str
+            A name of :data:`SHIP_STATE`.
+        ship : int, optional
+            Ship index; all ships if omitted.
+        """
+        rows = self.ship_rows(x)
+        col = rows[..., S_[name]]
+        return col if ship is None else col[..., ship]
+
+    def outcomes(self, x_final) -> list[dict]:
+        """Per ship: outcome, stalled position, time to goal, CE, MCTE, collision and closest approach.
+
+        Every runner judges a run with this one method (:func:`ship_outcome`, :func:`voyage_metrics`).
+
+        Parameters
+        ----------
+        x_final : ndarray (nx,)
+            Final scenario state.
+        """
+        x = np.asarray(x_final, float).ravel()
+        rows = self.ship_rows(x)
+        t_end = float(x[0])
+        ce, mcte = voyage_metrics(rows, t_end, math.radians(self.params["delta_max_deg"]))
+        out = []
+        for i, row in enumerate(rows):
+            status, where = ship_outcome(row, t_end, float(self.params["stall_window"]))
+            t_col = float(row[S_["t_collision"]])
+            d_min = float(row[S_["d_min"]])
+            out.append({
+                "status": status, "stalled_at": where,
+                "stalled_time": float(row[S_["t_best"]]) if status == "stalled" else None,
+                "time_to_goal": float(row[S_["t_goal"]]) if status == "reached" else None,
+                "ce": float(ce[i]), "mcte": float(mcte[i]),
+                "collision_time": t_col if t_col >= 0 else None,
+                "collision_with": int(row[S_["collision_with"]]) if t_col >= 0 else None,
+                "min_distance": d_min if d_min < 1e5 else None,
+                "min_distance_with": int(row[S_["d_min_with"]]) if d_min < 1e5 else None,
+                "reactive_time": float(row[S_["reactive_time"]]),
+            })
+        return out
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A scenario ready to simulate.
+
+    Parameters
+    ----------
+    model : ClosedLoopModel
+        Its closed loop.
+    x0 : ndarray (nx,)
+        Initial state.
+    p : ndarray (np,)
+        Parameter vector.
+    ships : tuple of dict
+        The per-ship dicts given to :func:`pack_params` / :func:`initial_state`.
+    """
+
+    model: ClosedLoopModel
+    x0: np.ndarray = field(compare=False)
+    p: np.ndarray = field(compare=False)
+    ships: tuple = field(default=(), compare=False)
+
+    @property
+    def layout(self) -> Layout:
+        """The model's layout."""
+        return self.model.layout
+
+    @property
+    def params(self) -> dict:
+        """The resolved parameter set."""
+        return self.model.params
+
+
+def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
+    """The :class:`Problem` of a scenario: parameters resolved from the table, the scenario's settings and
+    ``params`` (which win), the layout from its ships, obstacles and walls.
+
+    Parameters
+    ----------
+    sc : Scenario
+        A validated scenario (:func:`mmg_casadi.scenario.load_scenario`).
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`).
+    error : type, optional
+        Error class for a bad override (default :class:`~mmg_casadi.errors.ParameterError`).
+
+    Examples
+    --------
+    >>> from mmg_casadi.scenario import Scenario, Settings, ShipSpec
+    >>> sc = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> pr = build_problem(sc, {"kp": 2.0})
+    >>> pr.layout.methods, pr.params["kp"], pr.params["t_max"]
+    (('none',), 2.0, 300.0)
+    """
+    resolved = sc.settings.resolved(params, cls=error or ParameterError)
+    methods_ = tuple(sc.method_of(i) for i in range(len(sc.ships)))
+    for i, m in enumerate(methods_):
+        if m not in methods.METHODS:
+            raise ScenarioError(f"ships[{i}].method", f"one of: {', '.join(methods.NAMES)}", m)
+    walls = []
+    for w in sc.walls:
+        pts = np.asarray(w.points, float)
+        walls += [(a[0], a[1], b[0], b[1]) for a, b in zip(pts[:-1], pts[1:])]
+    layout = Layout(methods=methods_, n_obstacles=len(sc.obstacles), n_walls=len(walls),
+                    max_path=max(1 + len(s.waypoints) for s in sc.ships),
+                    vo_candidates=resolved["vo_candidates"], vo_cone=resolved["vo_cone"])
+    model = ClosedLoopModel(layout, resolved)
+    ships = tuple({"n_rpm": propeller_rpm_for_speed(s.speed), "path": [s.start, *s.waypoints], "stays": s.stays,
+                   "start": s.start, "heading": math.radians(s.heading_deg), "speed": s.speed} for s in sc.ships)
+    obstacles = [(o.position[0], o.position[1], o.radius) for o in sc.obstacles]
+    return Problem(model, model.initial_state(list(ships)), model.pack(list(ships), obstacles, walls), ships)

@@ -10,7 +10,8 @@ import math
 from dataclasses import dataclass
 
 from .actuator import saturate
-from .errors import check_range
+from .params import check_fields
+from .params import field as param_field
 from .guidance import wrap_angle
 
 
@@ -22,14 +23,12 @@ class PdHeadingParams:
     (rad of rudder per unit non-dimensional yaw rate, ≥ 0); ``delta_max_deg``: command saturation (deg, (0, 45]).
     """
 
-    kp: float = 3.5
-    kd: float = 4.0
-    delta_max_deg: float = 35.0
+    kp: float = param_field("kp")
+    kd: float = param_field("kd")
+    delta_max_deg: float = param_field("delta_max_deg")
 
     def __post_init__(self):
-        check_range("kp", self.kp, 0.0, None, low_open=True)
-        check_range("kd", self.kd, 0.0, None)
-        check_range("delta_max_deg", self.delta_max_deg, 0.0, 45.0, low_open=True, unit="degrees")
+        check_fields(self)
 
     @property
     def delta_max(self) -> float:

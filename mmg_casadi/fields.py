@@ -26,6 +26,8 @@ import numpy as np
 
 from .errors import ParameterError, check_range
 from .guidance import wrap_angle
+from .params import check_fields
+from .params import field as param_field
 
 R_MIN = 1e-3
 """Smallest distance (L) used as a divisor; closer points are treated as being ``R_MIN`` away."""
@@ -45,14 +47,12 @@ class InverseSquareParams:
     (d0 = R_safe = 15 L would put it at 6.2 L).
     """
 
-    k_att: float = 50.0
-    k_rep: float = 200000.0
-    d0: float = 8.0
+    k_att: float = param_field("k_att")
+    k_rep: float = param_field("k_rep")
+    d0: float = param_field("d0")
 
     def __post_init__(self):
-        check_range("k_att", self.k_att, 0.0, None)
-        check_range("k_rep", self.k_rep, 0.0, None)
-        check_range("d0", self.d0, 0.0, None, low_open=True, unit="L")
+        check_fields(self)
 
 
 @dataclass(frozen=True)
@@ -63,12 +63,11 @@ class SinkVortexParams:
     K of the vortex at every active neighbour (L²/unit time, any real; < 0 turns a head-on ship to starboard).
     """
 
-    lam_sink: float = -100.0
-    k_vor: float = -10.0
+    lam_sink: float = param_field("lam_sink")
+    k_vor: float = param_field("k_vor")
 
     def __post_init__(self):
-        check_range("lam_sink", self.lam_sink, None, 0.0, high_open=True)
-        check_range("k_vor", self.k_vor, **_ANY_REAL)
+        check_fields(self)
 
 
 @dataclass(frozen=True)
@@ -83,18 +82,14 @@ class ModifiedVortexParams:
     (0, π]); 5π/8 leaves the 112.5° stern sector (overtaking, stand-on) without vortex.
     """
 
-    lam_sink: float = -100.0
-    k_vor0: float = -10.0
-    r_safe: float = 15.0
-    r_tol: float = 2.0
-    gamma_max: float = 5 * math.pi / 8
+    lam_sink: float = param_field("lam_sink")
+    k_vor0: float = param_field("k_vor0")
+    r_safe: float = param_field("r_safe")
+    r_tol: float = param_field("r_tol_vortex")
+    gamma_max: float = param_field("gamma_max_deg", math.pi / 180.0)
 
     def __post_init__(self):
-        check_range("lam_sink", self.lam_sink, None, 0.0, high_open=True)
-        check_range("k_vor0", self.k_vor0, **_ANY_REAL)
-        check_range("r_safe", self.r_safe, 0.0, None, low_open=True, unit="L")
-        check_range("r_tol", self.r_tol, 0.0, None, unit="L")
-        check_range("gamma_max", self.gamma_max, 0.0, math.pi, low_open=True, unit="rad")
+        check_fields(self)
 
 
 @dataclass(frozen=True)
@@ -105,12 +100,11 @@ class WallParams:
     distance below which a wall acts (L, > 0).
     """
 
-    lam: float = 10.0
-    d_act: float = 2.0
+    lam: float = param_field("wall_lam")
+    d_act: float = param_field("wall_d_act")
 
     def __post_init__(self):
-        check_range("lam", self.lam, 0.0, None)
-        check_range("d_act", self.d_act, 0.0, None, low_open=True, unit="L")
+        check_fields(self)
 
 
 def _matrix(x, rows):

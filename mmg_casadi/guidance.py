@@ -15,7 +15,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .errors import ParameterError, check_range
+from .errors import ParameterError
+from .params import check_fields
+from .params import field as param_field
 
 _CASADI_TYPES = (ca.SX, ca.MX, ca.DM)
 
@@ -28,14 +30,12 @@ class IlosParams:
     ``r_tol``: waypoint acceptance radius R_tol (L, > 0).
     """
 
-    delta: float = 2.0
-    k: float = 0.05
-    r_tol: float = 3.0
+    delta: float = param_field("ilos_delta")
+    k: float = param_field("ilos_k")
+    r_tol: float = param_field("goal_tolerance")
 
     def __post_init__(self):
-        check_range("delta", self.delta, 0.0, None, low_open=True, unit="L")
-        check_range("k", self.k, 0.0, None)
-        check_range("r_tol", self.r_tol, 0.0, None, low_open=True, unit="L")
+        check_fields(self)
 
     @property
     def kp_g(self) -> float:

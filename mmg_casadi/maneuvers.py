@@ -84,6 +84,19 @@ def turning_circle(rudder_deg: float = 35.0, *, port: bool = False, speed: float
     90°), ``tactical_diameter`` (sideways travel at 180°), ``x_min`` (smallest x after the 180° point),
     ``steady_diameter``, ``final_speed`` (U/U_des), ``direction``.
 
+    Parameters
+    ----------
+    rudder_deg : float
+        Rudder angle magnitude (degrees, (0, 35]).
+    port : bool
+        Turn to port instead of starboard.
+    speed : float
+        Approach speed (fraction of the design speed, [0.2, 1.2]).
+    t_end : float
+        Duration (L/U).
+    ship, steering : ShipParams, SteeringParams, optional
+        Ship and steering gear (default: the KCS).
+
     Examples
     --------
     >>> r = turning_circle(15)
@@ -156,6 +169,17 @@ def zigzag(angle_deg: float = 10.0, *, speed: float = 1.0, t_end: float = 40.0,
 
     Metrics (degrees): ``overshoot_1`` and ``overshoot_2`` — how far the heading goes beyond ±angle after the
     first and second rudder reversals; times non-dimensional.
+
+    Parameters
+    ----------
+    angle_deg : float
+        Rudder angle and heading-change trigger (degrees, (0, 35]).
+    speed : float
+        Approach speed (fraction of the design speed, [0.2, 1.2]).
+    t_end : float
+        Duration (L/U).
+    ship, steering : ShipParams, SteeringParams, optional
+        Ship and steering gear (default: the KCS).
 
     Examples
     --------

@@ -36,10 +36,10 @@ Outcome of a run (own ship = agent 0, judged from the final state):
     ``failure_time`` the time of its closest approach to the goal), ``"timeout"`` (otherwise;
     ``failure_time`` = end time); ``""`` on success.
 
-CE and MCTE follow :mod:`mmg_casadi.scenario_run`: ``ce = ce_int / (delta_max * T)``,
-``mcte = mcte_int / T`` with ``T = t_goal`` if the ship reached its goal, else the end time of the run
-(``t_max``). For a diverged ship the duration of its voyage is not in the final state, so its CE/MCTE are
-``nan`` (summaries average them over successful runs only). Fleet metrics are means over the ships that
+Outcome, CE and MCTE are judged by :meth:`mmg_casadi.closed_loop.ClosedLoopModel.outcomes`, as for a single
+scenario run (a diverged ship's CE/MCTE are ``nan``; summaries average them over successful runs only). Every
+run uses the same resolved parameter set (``params`` of :func:`run_study`: the table's defaults with the
+user's overrides), recorded in ``study.json``; a study is resumed only with the same parameters. Fleet metrics are means over the ships that
 reached their goals. ``guidance_call_us`` is the compiled time of one guidance evaluation (field / velocity
 obstacle + ILOS + PD) per ship, measured per batch on the batch's initial and final states; it is a timing
 and differs between repetitions, everything else is a deterministic function of
@@ -63,14 +63,16 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from .closed_loop import METHODS, NS, S_, Layout
+from . import methods as method_registry
+from .closed_loop import ClosedLoopModel, Layout, build_problem
 from .errors import InputError
-from .results import METRICS, RUN_COLUMNS, ResultsTable, summarize
+from .io import write_json
+from .params import PARAMETERS, diff, resolve
+from .results import RUN_COLUMNS, ResultsTable, summarize
 from .sampling import ENVIRONMENTS, parse_envs, sample_scenario
-from .scenario import Scenario, dump_scenario, scenario_from_dict
-from .scenario_run import STALL_WINDOW, build_problem
+from .scenario import Scenario, dump_scenario, scenario_from_dict, with_params
 
-DEFAULT_METHODS: tuple[str, ...] = ("modified-vortex", "inverse-square", "velocity-obstacle")
+DEFAULT_METHODS: tuple[str, ...] = method_registry.PAPER_STATISTICS
 """Methods compared by the paper's statistical analysis."""
 
 BACKENDS: tuple[str, ...] = ("local", "ray")
@@ -87,22 +89,28 @@ TIMING_COLUMNS: tuple[str, ...] = ("guidance_call_us",)
 # ----------------------------------------------------------------------------------------------- sampling
 
 def sampled_scenario(environment: int, method: str, run: int, base_seed: int = 0, *,
-                     t_max: float = 300.0) -> Scenario:
-    """The scenario of run ``run`` of ``environment`` with every ship using ``method`` (replayable).
+                     params: dict | None = None) -> Scenario:
+    """The scenario of run ``run`` of ``environment`` with every ship using ``method`` and the parameter values
+    ``params`` written into its settings (replayable on its own).
 
     Examples
     --------
-    >>> sc = sampled_scenario(1, "modified-vortex", 0)
+    >>> sc = sampled_scenario(1, "modified-vortex", 0, params={"t_max": 100.0})
     >>> len(sc.ships), len(sc.obstacles), sc.settings.method, sc.settings.t_max
-    (3, 1, 'modified-vortex', 300.0)
+    (3, 1, 'modified-vortex', 100.0)
     """
     sample = sample_scenario(environment, run, base_seed)
-    return scenario_from_dict(sample.to_scenario_dict(method=method, t_max=t_max),
-                              source=f"env{environment}/{method}/run{run}")
+    sc = scenario_from_dict(sample.to_scenario_dict(method=method), source=f"env{environment}/{method}/run{run}")
+    return with_params(sc, params)
 
 
-def layout_for(environment: int, method: str, *, t_max: float = 300.0) -> Layout:
-    """The closed-loop :class:`Layout` shared by all runs of ``(environment, method)``.
+def _non_default(params: dict | None) -> dict:
+    """The entries of ``params`` that differ from the table's defaults (what a scenario file must carry)."""
+    return {k: v for k, v in (params or {}).items() if v != PARAMETERS[k].default}
+
+
+def layout_for(environment: int, method: str, params: dict | None = None) -> Layout:
+    """The closed-loop :class:`Layout` shared by all runs of ``(environment, method)`` with ``params``.
 
     Examples
     --------
@@ -110,29 +118,20 @@ def layout_for(environment: int, method: str, *, t_max: float = 300.0) -> Layout
     >>> lay.n_ships, lay.n_obstacles, lay.max_path
     (4, 2, 2)
     """
-    return build_problem(sampled_scenario(environment, method, 0, 0, t_max=t_max))[0]
+    return build_problem(sampled_scenario(environment, method, 0, 0, params=params)).layout
 
 
 # ------------------------------------------------------------------------------------------ classification
 
-def _ship_rows(layout: Layout, x: np.ndarray) -> np.ndarray:
-    return np.asarray(x, float)[1:1 + layout.n_ships * NS].reshape(layout.n_ships, NS)
-
-
-def classify(layout: Layout, x_final, g: dict, *, stall_window: float = STALL_WINDOW) -> dict:
+def classify(model: ClosedLoopModel, x_final) -> dict:
     """Outcome and metrics of one run from its final scenario state (see the module docstring).
 
     Parameters
     ----------
-    layout : Layout
-        Layout of the run (ships, obstacles).
+    model : ClosedLoopModel
+        The run's closed loop (layout and resolved parameters).
     x_final : array (nx,)
         Final scenario state ``[t, ship_0, ship_1, ...]``.
-    g : dict
-        The run's global parameters (``t_max``, ``delta_max``), e.g. from
-        :func:`~mmg_casadi.scenario_run.build_problem`.
-    stall_window : float
-        No progress towards the goal for this long before the end of an unfinished run → ``"stalled"``.
 
     Returns
     -------
@@ -141,55 +140,41 @@ def classify(layout: Layout, x_final, g: dict, *, stall_window: float = STALL_WI
         ``guidance_call_us``.
     """
     x = np.asarray(x_final, float).ravel()
-    rows = _ship_rows(layout, x)
+    layout = model.layout
     N = layout.n_ships
-    t_end = float(x[0])
-    t_max = float(g["t_max"])
-    delta_max = float(g["delta_max"])
-    status = rows[:, S_["status"]]
-    t_goal = rows[:, S_["t_goal"]]
-    reached = (status == 1) & (t_goal >= 0) & (t_goal <= t_max + 1e-9)
-    collided = rows[:, S_["t_collision"]] >= 0
-
-    T = np.where(reached, t_goal, np.where(status == 0, t_end, np.nan))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        T = np.where(T > 0, T, np.nan)
-        ce = rows[:, S_["ce_int"]] / (delta_max * T)
-        mcte = rows[:, S_["mcte_int"]] / T
-
-    own = rows[0]
+    ships = model.outcomes(x)
+    own = ships[0]
+    reached = np.array([s["status"] == "reached" for s in ships])
+    collided = np.array([s["collision_time"] is not None for s in ships])
     if collided[0]:
-        failure = "collision"
-        j = int(own[S_["collision_with"]])
-        pair = f"0-{j}" if j < N else f"0-obs{j - N}"
-        failure_time = float(own[S_["t_collision"]])
+        j = own["collision_with"]
+        failure, pair, failure_time = "collision", (f"0-{j}" if j < N else f"0-obs{j - N}"), own["collision_time"]
     elif reached[0]:
         failure, pair, failure_time = "", "", math.nan
-    elif status[0] == 2:
+    elif own["status"] == "stalled":
+        failure, pair, failure_time = "stalled", "", own["stalled_time"]
+    elif own["status"] == "diverged":
         failure, pair, failure_time = "diverged", "", math.nan
-    elif t_end - own[S_["t_best"]] >= stall_window:
-        failure, pair, failure_time = "stalled", "", float(own[S_["t_best"]])
     else:
-        failure, pair, failure_time = "timeout", "", t_end
+        failure, pair, failure_time = "timeout", "", float(x[0])
 
-    def fleet_mean(values):
-        v = values[reached]
-        return float(np.mean(v)) if v.size else math.nan
+    def fleet_mean(key):
+        v = [s[key] for s, r in zip(ships, reached) if r]
+        return float(np.mean(v)) if v else math.nan
 
-    d_min = float(own[S_["d_min"]])
     return {
         "success": bool(reached[0] and not collided[0]),
         "fleet_success": bool(np.all(reached) and not np.any(collided)),
         "failure": failure,
         "failure_pair": pair,
         "failure_time": failure_time,
-        "time_to_goal": float(t_goal[0]) if reached[0] else math.nan,
-        "ce": float(ce[0]),
-        "mcte": float(mcte[0]),
-        "fleet_time_to_goal": fleet_mean(t_goal),
-        "fleet_ce": fleet_mean(ce),
-        "fleet_mcte": fleet_mean(mcte),
-        "min_distance": d_min if d_min < 1e5 else math.nan,
+        "time_to_goal": own["time_to_goal"] if reached[0] else math.nan,
+        "ce": own["ce"],
+        "mcte": own["mcte"],
+        "fleet_time_to_goal": fleet_mean("time_to_goal"),
+        "fleet_ce": fleet_mean("ce"),
+        "fleet_mcte": fleet_mean("mcte"),
+        "min_distance": math.nan if own["min_distance"] is None else own["min_distance"],
         "n_ships": N,
         "n_obstacles": layout.n_obstacles,
     }
@@ -236,33 +221,44 @@ def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: flo
     return 1e6 * elapsed / (repeats * n * layout.n_ships)
 
 
-def run_scenarios(scenarios, *, chunk: int = DEFAULT_CHUNK, time_guidance_calls: bool = True,
-                  stall_window: float = STALL_WINDOW) -> list[dict]:
+def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT_CHUNK,
+                  time_guidance_calls: bool = True) -> list[dict]:
     """Simulate scenarios together and classify each from its final state.
 
     Scenarios with the same :class:`Layout` are rolled out as one batch (one compiled step, ``map`` over the
     scenarios, ``mapaccum`` over chunks of ``chunk`` steps). Returns one dict per scenario, in order, with the
     columns of :func:`classify` plus ``guidance_call_us`` (``nan`` unless ``time_guidance_calls``).
+
+    Parameters
+    ----------
+    scenarios : list of Scenario
+        The scenarios.
+    params : dict, optional
+        Parameter overrides applied to every scenario (they win over its settings).
+    chunk : int
+        Steps per compiled chunk.
+    time_guidance_calls : bool
+        Measure the compiled guidance call per ship of every batch.
     """
     from .simulation import simulate_batch
-    problems = [build_problem(sc) for sc in scenarios]
+    problems = [build_problem(sc, params) for sc in scenarios]
     groups: dict[Layout, list[int]] = {}
-    for i, (layout, *_rest) in enumerate(problems):
-        groups.setdefault(layout, []).append(i)
+    for i, pr in enumerate(problems):
+        groups.setdefault(pr.layout, []).append(i)
     out: list[dict | None] = [None] * len(problems)
     for layout, idx in groups.items():
-        X0 = np.column_stack([problems[i][1] for i in idx])
-        P = np.column_stack([problems[i][2] for i in idx])
+        X0 = np.column_stack([problems[i].x0 for i in idx])
+        P = np.column_stack([problems[i].p for i in idx])
         XF, _busy = simulate_batch(layout, X0, P, chunk=chunk)
         us = time_guidance(layout, np.hstack([X0, XF]), np.hstack([P, P])) if time_guidance_calls else math.nan
         for col, i in enumerate(idx):
-            row = classify(layout, XF[:, col], problems[i][3], stall_window=stall_window)
+            row = classify(problems[i].model, XF[:, col])
             row["guidance_call_us"] = us
             out[i] = row
     return out  # type: ignore[return-value]
 
 
-def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, t_max: float = 300.0,
+def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params: dict | None = None,
               chunk: int = DEFAULT_CHUNK) -> list[dict]:
     """Simulate runs of one (environment, method) together and return their result rows.
 
@@ -276,8 +272,8 @@ def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, t_max:
         Run indices.
     base_seed : int
         Base seed of the study (stored in the ``seed`` column).
-    t_max : float
-        Time limit of every run (non-dimensional).
+    params : dict, optional
+        Parameter values of every run (by name; the table's defaults for the rest).
     chunk : int
         Steps per compiled chunk.
 
@@ -289,7 +285,8 @@ def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, t_max:
     runs = [int(r) for r in runs]
     if not runs:
         return []
-    scenarios = [sampled_scenario(environment, method, r, base_seed, t_max=t_max) for r in runs]
+    overrides = _non_default(params)
+    scenarios = [sampled_scenario(environment, method, r, base_seed, params=overrides) for r in runs]
     results = run_scenarios(scenarios, chunk=chunk)
     rows = []
     for r, res in zip(runs, results):
@@ -302,25 +299,26 @@ def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, t_max:
 
 @dataclass(frozen=True)
 class BatchTask:
-    """One unit of work: runs of one (environment, method)."""
+    """One unit of work: runs of one (environment, method) with one parameter set (``params``: sorted
+    ``(name, value)`` pairs of the overrides)."""
 
     environment: int
     method: str
     runs: tuple
     base_seed: int = 0
-    t_max: float = 300.0
+    params: tuple = ()
     chunk: int = DEFAULT_CHUNK
 
     def __call__(self) -> list[dict]:
-        return run_batch(self.environment, self.method, list(self.runs), self.base_seed, t_max=self.t_max,
-                         chunk=self.chunk)
+        return run_batch(self.environment, self.method, list(self.runs), self.base_seed,
+                         params=dict(self.params), chunk=self.chunk)
 
 
 def _run_task(task: BatchTask) -> list[dict]:
     return task()
 
 
-def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int = 0, t_max: float = 300.0,
+def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int = 0, params: dict | None = None,
                  batch_size: int = DEFAULT_BATCH, chunk: int = DEFAULT_CHUNK) -> list[BatchTask]:
     """Batches of the runs ``0..runs-1`` of every (environment, method) whose key is not in ``done``.
 
@@ -333,11 +331,12 @@ def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int =
     >>> [(t.environment, t.runs) for t in tasks]
     [(1, (1, 2)), (2, (0, 1)), (1, (3, 4)), (2, (2, 3)), (2, (4,))]
     """
+    items = tuple(sorted(_non_default(params).items()))
     cells = []
     for env in envs:
         for m in methods:
             todo = [r for r in range(runs) if (env, m, r) not in done]
-            cells.append([BatchTask(env, m, tuple(todo[i:i + batch_size]), base_seed, t_max, chunk)
+            cells.append([BatchTask(env, m, tuple(todo[i:i + batch_size]), base_seed, items, chunk)
                           for i in range(0, len(todo), batch_size)])
     tasks = []
     for k in range(max((len(c) for c in cells), default=0)):
@@ -403,7 +402,7 @@ class LocalExecutor:
     """
 
     def __init__(self, workers: int | None = None):
-        workers = _check_workers("--workers", workers)
+        workers = _check_workers("workers", workers)
         self.workers = workers or os.cpu_count() or 1
 
     @property
@@ -455,12 +454,12 @@ class RayExecutor:
 
     def __init__(self, address: str | None = None, num_cpus: int | None = None):
         self.address = address
-        self.num_cpus = _check_workers("--workers", num_cpus)
+        self.num_cpus = _check_workers("workers", num_cpus)
         self._owns = False
         try:
             import ray  # noqa: F401
         except ImportError:
-            raise InputError("--backend", "'local' (Ray is not installed; pip install 'mmg-casadi[ray]')",
+            raise InputError("backend", "'local' (Ray is not installed; pip install 'mmg-casadi[ray]')",
                              "ray") from None
 
     def _runtime_env(self) -> dict | None:
@@ -533,27 +532,11 @@ def _check_envs(envs) -> tuple[int, ...]:
     try:
         items = list(envs)
     except TypeError:
-        raise InputError("--envs", "environment numbers in 1-5", envs) from None
+        raise InputError("envs", "environment numbers in 1-5", envs) from None
     if not items or any(isinstance(e, bool) or not isinstance(e, (int, np.integer)) or e not in ENVIRONMENTS
                         for e in items):
-        raise InputError("--envs", "environment numbers in 1-5", envs)
+        raise InputError("envs", "environment numbers in 1-5", envs)
     return tuple(sorted({int(e) for e in items}))
-
-
-def _check_methods(methods) -> tuple[str, ...]:
-    allowed = f"a non-empty list of: {', '.join(METHODS)}"
-    if isinstance(methods, str):
-        methods = [m.strip() for m in methods.split(",") if m.strip()]
-    try:
-        items = list(methods)
-    except TypeError:
-        raise InputError("--methods", allowed, methods) from None
-    if not items:
-        raise InputError("--methods", allowed, methods)
-    for m in items:
-        if m not in METHODS:
-            raise InputError("--methods", allowed, m)
-    return tuple(dict.fromkeys(items))
 
 
 def _check_int(field: str, value, low: int) -> int:
@@ -562,50 +545,43 @@ def _check_int(field: str, value, low: int) -> int:
     return int(value)
 
 
-def _json_safe(obj):
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, dict):
-        return {k: _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
-    return obj
-
-
 def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS, base_seed: int = 0,
-              backend: str = "local", address: str | None = None, workers: int | None = None,
-              t_max: float = 300.0, progress: bool = True, batch_size: int = DEFAULT_BATCH,
+              params: dict | None = None, backend: str = "local", address: str | None = None,
+              workers: int | None = None, progress: bool = True, batch_size: int = DEFAULT_BATCH,
               chunk: int = DEFAULT_CHUNK, executor=None):
     """Run (or resume) the statistical study and write its outputs into ``out_dir``.
 
     Parameters
     ----------
     out_dir : str or Path
-        Output directory: ``runs.csv`` (one row per run, appended as batches finish; ``study.json`` records
-        the horizon it was made with), ``summary.csv``,
-        ``summary.md``, ``statistics.png``, ``metrics.json`` (config + summary rows) and
+        Output directory: ``runs.csv`` (one row per run, appended as batches finish), ``study.json`` (the
+        resolved parameter set and the seed the table was made with), ``summary.csv``, ``summary.md``,
+        ``statistics.png``, ``metrics.json`` (config, parameters and summary rows) and
         ``failures/env{e}_{method}_run{r}.toml`` (first ≤ 20 failures per cell, replayable with
         ``mmg-casadi simulate``).
     runs : int
         Runs per (environment, method), ≥ 1; run indices ``0..runs-1``.
     envs : str or iterable of int
         Environments, e.g. ``"1-5"`` or ``(1, 3)``.
-    methods : iterable of str
-        Collision-avoidance methods.
+    methods : str or iterable of str
+        Collision-avoidance methods (names in :data:`mmg_casadi.methods.METHODS`).
     base_seed : int
         Base seed of the scenario sampler (≥ 0); a resumed table must have been made with the same seed.
-    backend : str
-        ``"local"`` (process pool) or ``"ray"``.
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`) for every run, e.g. from
+        ``tune apf``; a resumed table must have been made with the same resolved parameters.
+    backend : {"local", "ray"}
+        Local process pool or a Ray cluster.
     address : str, optional
         Ray cluster address (backend ``"ray"``).
     workers : int, optional
         Local worker processes (default: all cores); for Ray the CPUs of a new local cluster.
-    t_max : float
-        Time limit of every run (non-dimensional), > 0.
     progress : bool
         Show a progress bar on stderr (rate and ETA count only runs simulated by this call).
-    batch_size, chunk : int
-        Runs per task and steps per compiled chunk.
+    batch_size : int
+        Runs per task.
+    chunk : int
+        Steps per compiled chunk.
     executor : LocalExecutor or RayExecutor, optional
         Use this executor instead of one made from ``backend``/``address``/``workers`` (not closed here).
 
@@ -614,23 +590,23 @@ def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT
     Summary
         The summary of the requested cells (rows already in ``runs.csv`` included).
     """
-    runs = _check_int("--runs", runs, 1)
+    runs = _check_int("runs", runs, 1)
     if backend not in BACKENDS:
-        raise InputError("--backend", f"one of: {', '.join(BACKENDS)}", backend)
+        raise InputError("backend", f"one of: {', '.join(BACKENDS)}", backend)
+    if address is not None and backend != "ray":
+        raise InputError("address", "nothing unless backend is 'ray'", address)
     envs = _check_envs(envs)
-    methods = _check_methods(methods)
-    base_seed = _check_int("--seed", base_seed, 0)
-    workers = _check_workers("--workers", workers)
+    methods = method_registry.parse_list(methods)
+    base_seed = _check_int("base_seed", base_seed, 0)
+    workers = _check_workers("workers", workers)
     batch_size = _check_int("batch_size", batch_size, 1)
     chunk = _check_int("chunk", chunk, 1)
-    if isinstance(t_max, bool) or not isinstance(t_max, (int, float)) or not math.isfinite(t_max) or t_max <= 0:
-        raise InputError("t_max", "a number > 0", t_max)
-    t_max = float(t_max)
+    resolved = resolve(params, prefix="params.")
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with _exclusive(out):
-        return _run_study(out, runs, envs, methods, base_seed, backend, address, workers, t_max, progress,
+        return _run_study(out, runs, envs, methods, base_seed, resolved, backend, address, workers, progress,
                           batch_size, chunk, executor)
 
 
@@ -642,24 +618,24 @@ def _exclusive(out: Path):
         try:
             fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
-            raise InputError("--out", "a directory no other running study is writing to", str(out)) from None
+            raise InputError("out_dir", "a directory no other running study is writing to", str(out)) from None
         yield
     finally:
         fh.close()
 
 
-def _run_study(out, runs, envs, methods, base_seed, backend, address, workers, t_max, progress, batch_size,
+def _run_study(out, runs, envs, methods, base_seed, params, backend, address, workers, progress, batch_size,
                chunk, executor):
     table = ResultsTable(out / "runs.csv")
     planned = {(e, m, r) for e in envs for m in methods for r in range(runs)}
     stored = [row for row in table.read() if (row["environment"], row["method"], row["run"]) in planned]
     for row in stored:
         if row["seed"] != base_seed:
-            raise InputError("--seed", f"the seed {row['seed']} that {table.path} was made with (or a new --out)",
-                             base_seed)
+            raise InputError("base_seed", f"the seed {row['seed']} that {table.path} was made with (or a new "
+                             "output directory)", base_seed)
     done = {(row["environment"], row["method"], row["run"]) for row in stored}
-    _check_horizon(out / "study.json", t_max, has_rows=bool(table.completed()))
-    tasks = plan_batches(envs, methods, runs, done=done, base_seed=base_seed, t_max=t_max,
+    _check_study_params(out / "study.json", params, has_rows=bool(table.completed()))
+    tasks = plan_batches(envs, methods, runs, done=done, base_seed=base_seed, params=params,
                          batch_size=batch_size, chunk=chunk)
     log = sys.stderr if progress else None
 
@@ -672,7 +648,7 @@ def _run_study(out, runs, envs, methods, base_seed, backend, address, workers, t
         if tasks:
             cells = list(dict.fromkeys((t.environment, t.method) for t in tasks))
             n_compile = workers or os.cpu_count() or 1
-            prepare_layouts([layout_for(e, m, t_max=t_max) for e, m in cells], n_compile, log=log)
+            prepare_layouts([layout_for(e, m, _non_default(params)) for e, m in cells], n_compile, log=log)
             bar = None
             if progress:
                 from .progress import Progress
@@ -699,38 +675,51 @@ def _run_study(out, runs, envs, methods, base_seed, backend, address, workers, t
     (out / "summary.md").write_text(summary.to_markdown() + "\n", encoding="utf-8")
     from .plot_statistics import plot_statistics
     plot_statistics(summary, out / "statistics.png")
-    failures = write_failures(rows, out / "failures", t_max=t_max)
+    failures = write_failures(rows, out / "failures", params=params)
 
-    from .cli import write_json
     config = {"runs": runs, "envs": list(envs), "methods": list(methods), "base_seed": base_seed,
-              "backend": backend, "address": address, "workers": workers, "t_max": t_max,
-              "batch_size": batch_size, "chunk": chunk}
-    write_json(out / "metrics.json", _json_safe({
-        "config": config, "summary": summary.rows, "runs_total": len(rows), "runs_new": new_runs,
-        "elapsed_s": elapsed, "failure_files": [str(p.relative_to(out)) for p in failures]}))
+              "backend": backend, "address": address, "workers": workers, "batch_size": batch_size, "chunk": chunk}
+    write_json(out / "metrics.json", {
+        "config": config, "params": params, "summary": summary.rows, "runs_total": len(rows),
+        "runs_new": new_runs, "elapsed_s": elapsed, "failure_files": [str(p.relative_to(out)) for p in failures]})
     return summary
 
 
-def _check_horizon(path: Path, t_max: float, *, has_rows: bool) -> None:
-    """Refuse to resume a table made with another ``t_max`` (not a column of ``runs.csv``); record it."""
+def _check_study_params(path: Path, params: dict, *, has_rows: bool) -> None:
+    """Refuse to resume a table made with other parameters (they are not columns of ``runs.csv``); record them
+    in ``study.json``. The error names the first differing parameter."""
     import json
     if has_rows and path.exists():
         try:
-            stored = float(json.loads(path.read_text(encoding="utf-8"))["t_max"])
+            stored = json.loads(path.read_text(encoding="utf-8"))["params"]
         except (OSError, ValueError, KeyError, TypeError):
-            stored = None
-        if stored is not None and stored != t_max:
-            raise InputError("t_max", f"the t_max = {stored:g} that {path.parent / 'runs.csv'} was made with "
-                             "(or a new --out)", t_max)
+            raise InputError("out_dir", f"a directory whose study.json records the parameters of its runs.csv "
+                             f"({path} is unreadable or from an older version; use a new output directory)",
+                             str(path.parent)) from None
+        key = diff(stored, params)
+        if key is not None:
+            raise InputError(f"params.{key}", f"{stored.get(key)!r}, the value {path.parent / 'runs.csv'} was made "
+                             "with (or a new output directory)", params[key])
     if not path.exists() or not has_rows:
-        from .cli import write_json
-        write_json(path, {"t_max": t_max, "stall_window": STALL_WINDOW})
+        write_json(path, {"params": params})
 
 
-def write_failures(rows, directory, *, t_max: float = 300.0, limit: int = MAX_FAILURE_FILES) -> list[Path]:
+def write_failures(rows, directory, *, params: dict | None = None, limit: int = MAX_FAILURE_FILES) -> list[Path]:
     """Write the first ``limit`` failed runs (by run index) of every cell as replayable scenario TOML files.
 
-    Files are named ``env{e}_{method}_run{r}.toml``; each holds the sampled scenario with that method.
+    Files are named ``env{e}_{method}_run{r}.toml``; each holds the sampled scenario with that method and the
+    study's non-default parameter values in its ``[settings]``.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of ``runs.csv``.
+    directory : str or Path
+        Where to write.
+    params : dict, optional
+        The study's parameters.
+    limit : int
+        Files per (environment, method).
     """
     directory = Path(directory)
     by_cell: dict[tuple[int, str], list[dict]] = {}
@@ -738,9 +727,10 @@ def write_failures(rows, directory, *, t_max: float = 300.0, limit: int = MAX_FA
         if r.get("failure"):
             by_cell.setdefault((r["environment"], r["method"]), []).append(r)
     paths = []
+    overrides = _non_default(params)
     for (env, method), failed in by_cell.items():
         for r in sorted(failed, key=lambda r: r["run"])[:limit]:
-            sc = sampled_scenario(env, method, r["run"], r["seed"] or 0, t_max=t_max)
+            sc = sampled_scenario(env, method, r["run"], r["seed"] or 0, params=overrides)
             path = directory / f"env{env}_{method}_run{r['run']}.toml"
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(dump_scenario(sc), encoding="utf-8")

@@ -91,20 +91,24 @@ def plot_maneuver(result, path=None) -> Figure:
     return fig
 
 
-def plot_scenario(result, path=None, *, title=None) -> Figure:
-    """Paths of all ships (marine view) with start/goal markers, R_safe circles at the closest approach, static
-    obstacles and walls; rudder command vs actual; distance between agents while inside R_safe with the
-    collision threshold. ``result`` is a :class:`~mmg_casadi.scenario_run.ScenarioResult`.
+def plot_paths(result, ax, *, title=None):
+    """Paths of all ships (marine view) with start/goal markers, static obstacles with their R_safe circles,
+    walls and the own ship's R_safe circle at its closest approach, drawn into ``ax``; returns ``ax``.
+
+    Parameters
+    ----------
+    result : ScenarioResult
+        A simulated scenario (:func:`mmg_casadi.run_scenario`).
+    ax : matplotlib Axes
+        Where to draw.
+    title : str, optional
+        Axes title (default: method, collision, own ship CE and MCTE).
     """
     traj, sc = result.trajectory, result.scenario
     N = traj.layout.n_ships
     names = [s.name for s in sc.ships]
     mask = traj.sailing_mask()
-    r_safe = sc.settings.r_safe
-    cd = sc.settings.collision_distance
-    fig = Figure(figsize=(13, 6.5), layout="constrained")
-    gs = fig.add_gridspec(2, 2, width_ratios=[1.2, 1])
-    ax = fig.add_subplot(gs[:, 0])
+    r_safe = result.params["r_safe"]
     for i in range(N):
         c = COLORS[i % len(COLORS)]
         m = mask[:, i]
@@ -115,7 +119,7 @@ def plot_scenario(result, path=None, *, title=None) -> Figure:
             lab += f" ({enc})"
         draw_path(ax, x, y, psi, c, label=lab)
         g = sc.ships[i].waypoints[-1]
-        draw_goal(ax, g[0], g[1], c, tol=sc.settings.goal_tolerance)
+        draw_goal(ax, g[0], g[1], c, tol=result.params["goal_tolerance"])
         for wp in sc.ships[i].waypoints[:-1]:
             ax.plot(wp[1], wp[0], marker="o", color=c, ms=5, ls="none")
     for o in sc.obstacles:
@@ -127,14 +131,32 @@ def plot_scenario(result, path=None, *, title=None) -> Figure:
         ax.plot(pts[:, 1], pts[:, 0], "k-", lw=2)
     # R_safe circle around the own ship at its closest approach
     own = result.metrics["ships"][0]
-    k = int(np.argmin(result.own_distance())) if N + len(sc.obstacles) > 1 else 0
     if N + len(sc.obstacles) > 1:
+        k = int(np.argmin(result.own_distance()))
         draw_circle(ax, traj.state("x", 0)[k], traj.state("y", 0)[k], r_safe, color=COLORS[0], ls=":", lw=0.8)
     marine_axes(ax)
     ax.legend(fontsize=8, loc="best")
     status = "collision" if result.metrics["collision"] else "no collision"
-    ax.set_title(title or f"{result.metrics['method']}: {status}; own ship CE {own['ce']:.3f}, "
-                 f"MCTE {own['mcte']:.3f} L", fontsize=9)
+    ce = "–" if own["ce"] is None else f"{own['ce']:.3f}"
+    mcte = "–" if own["mcte"] is None else f"{own['mcte']:.3f}"
+    ax.set_title(title or f"{result.metrics['method']}: {status}; own ship CE {ce}, MCTE {mcte} L", fontsize=9)
+    return ax
+
+
+def plot_scenario(result, path=None, *, title=None) -> Figure:
+    """Paths (:func:`plot_paths`); rudder command vs actual; distance between agents while inside R_safe with
+    the collision threshold. ``result`` is a :class:`~mmg_casadi.scenario_run.ScenarioResult`; the figure is
+    saved to ``path`` when given.
+    """
+    traj, sc = result.trajectory, result.scenario
+    N = traj.layout.n_ships
+    names = [s.name for s in sc.ships]
+    mask = traj.sailing_mask()
+    r_safe = result.params["r_safe"]
+    cd = result.params["collision_distance"]
+    fig = Figure(figsize=(13, 6.5), layout="constrained")
+    gs = fig.add_gridspec(2, 2, width_ratios=[1.2, 1])
+    plot_paths(result, fig.add_subplot(gs[:, 0]), title=title)
 
     a1 = fig.add_subplot(gs[0, 1])
     t_aux = traj.t[:-1]

@@ -350,18 +350,18 @@ def parse_envs(text: str) -> tuple[int, ...]:
     >>> parse_envs("0-2")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    mmg_casadi.errors.InputError: --envs: expected environment numbers in 1-5 as a range '1-5', ..., got '0-2'
+    mmg_casadi.errors.InputError: envs: expected environment numbers in 1-5 as a range '1-5', ..., got '0-2'
     """
     if not isinstance(text, str) or not text.strip():
-        raise InputError("--envs", _ENVS_ALLOWED, text)
+        raise InputError("envs", _ENVS_ALLOWED, text)
     envs: set[int] = set()
     for item in text.split(","):
         m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", item)
         if m is None:
-            raise InputError("--envs", _ENVS_ALLOWED, text)
+            raise InputError("envs", _ENVS_ALLOWED, text)
         lo = int(m.group(1))
         hi = int(m.group(2)) if m.group(2) is not None else lo
         if lo > hi or lo not in ENVIRONMENTS or hi not in ENVIRONMENTS:
-            raise InputError("--envs", _ENVS_ALLOWED, text)
+            raise InputError("envs", _ENVS_ALLOWED, text)
         envs.update(range(lo, hi + 1))
     return tuple(sorted(envs))

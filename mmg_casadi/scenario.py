@@ -24,9 +24,9 @@ times non-dimensional (L/U). A scenario file looks like::
     [[walls]]
     points = [[0.0, 5.0], [50.0, 55.0]]   # polyline; each consecutive pair of points is one wall segment
 
-Besides the keys above, ``[settings]`` accepts ``goal_tolerance`` (L) and the optional field-parameter overrides
-listed in :data:`PARAM_KEYS`, which are kept in :attr:`Settings.params`. Their ranges are checked by the
-guidance code that uses them; here only their types are checked.
+Besides ``method``, ``[settings]`` accepts every parameter of the table :data:`mmg_casadi.params.PARAMETERS`
+(range-checked here); ``dt``, ``t_max``, ``r_safe``, ``collision_distance`` and ``goal_tolerance`` are fields of
+:class:`Settings`, the others are kept in :attr:`Settings.params`.
 
 Every malformed entry raises one :class:`~mmg_casadi.errors.ScenarioError` whose ``field`` is the dotted key
 (``ships[1].speed``, ``settings.method``, ``obstacles[0].position``) and whose message lists the allowed values.
@@ -40,15 +40,15 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .errors import ScenarioError, check_range
+from . import methods
+from .errors import ParameterError, ScenarioError, check_range
+from .params import PARAMETERS, check_value, resolve
 
-METHODS = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle", "none")
-VO_CONES = ("huang", "wide")
-PARAM_KEYS = (
-    "k_att", "k_rep", "d0", "lam_sink", "k_vor", "k_vor0", "r_tol_vortex", "gamma_max_deg", "wall_lam",
-    "wall_d_act", "ilos_delta", "ilos_k", "kp", "kd", "vo_candidates", "vo_cone", "stall_window",
-)
-SETTINGS_KEYS = ("method", "dt", "t_max", "r_safe", "collision_distance", "goal_tolerance") + PARAM_KEYS
+SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_tolerance")
+"""Table parameters that are fields of :class:`Settings`."""
+PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
+"""Table parameters kept in :attr:`Settings.params`."""
+SETTINGS_KEYS = ("method",) + tuple(PARAMETERS)
 SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays")
 OBSTACLE_KEYS = ("position", "radius")
 WALL_KEYS = ("points",)
@@ -73,7 +73,7 @@ def _as_points(ps) -> tuple[tuple[float, float], ...]:
 class Settings:
     """Scenario-wide settings.
 
-    ``method``: collision-avoidance method, one of :data:`METHODS`; ``dt``: guidance step (non-dimensional time,
+    ``method``: collision-avoidance method, a name in :data:`mmg_casadi.methods.METHODS`; ``dt``: guidance step (non-dimensional time,
     rudder command held over the step); ``t_max``: horizon (non-dimensional time); ``r_safe``: safe radius
     inside which other ships and obstacles act (L); ``collision_distance``: ship centres closer than this
     collide (L); ``goal_tolerance``: goal reached within this distance (L); ``params``: optional field and
@@ -86,15 +86,26 @@ class Settings:
     """
 
     method: str
-    dt: float = 0.25
-    t_max: float = 300.0
-    r_safe: float = 15.0
-    collision_distance: float = 2.0
-    goal_tolerance: float = 3.0
+    dt: float = PARAMETERS["dt"].default
+    t_max: float = PARAMETERS["t_max"].default
+    r_safe: float = PARAMETERS["r_safe"].default
+    collision_distance: float = PARAMETERS["collision_distance"].default
+    goal_tolerance: float = PARAMETERS["goal_tolerance"].default
     params: dict = field(default_factory=dict, hash=False)
 
     def __post_init__(self):
         object.__setattr__(self, "params", dict(self.params))
+
+    def resolved(self, overrides: dict | None = None, *, cls=ParameterError) -> dict:
+        """The full parameter set of this scenario: table defaults, these settings, then ``overrides``.
+
+        Examples
+        --------
+        >>> Settings("none", r_safe=10.0).resolved({"kp": 2.0})["r_safe"]
+        10.0
+        """
+        own = {k: getattr(self, k) for k in SETTINGS_FIELDS}
+        return resolve(own, self.params, overrides, cls=cls)
 
 
 @dataclass(frozen=True)
@@ -177,8 +188,18 @@ class WallSpec:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A whole scenario: ``settings``, ``ships`` (the first is the own ship), ``obstacles`` and ``walls``
-    (tuples, so a scenario is hashable).
+    """A whole scenario (tuples throughout, so a scenario is hashable).
+
+    Parameters
+    ----------
+    settings : Settings
+        Method and parameters.
+    ships : sequence of ShipSpec
+        The ships; the first is the own ship.
+    obstacles : sequence of ObstacleSpec
+        Static circular obstacles.
+    walls : sequence of WallSpec
+        Channel walls.
 
     Examples
     --------
@@ -197,7 +218,13 @@ class Scenario:
             object.__setattr__(self, name, tuple(getattr(self, name)))
 
     def method_of(self, i: int) -> str:
-        """The method ship ``i`` uses: its own override, else :attr:`Settings.method`."""
+        """The method ship ``i`` uses: its own override, else :attr:`Settings.method`.
+
+        Parameters
+        ----------
+        i : int
+            Ship index (0 is the own ship).
+        """
         own = self.ships[i].method
         return self.settings.method if own is None else own
 
@@ -287,35 +314,17 @@ def _points(value, key: str, min_count: int) -> tuple[tuple[float, float], ...]:
     return tuple(_point(p, f"{key}[{j}]") for j, p in enumerate(value))
 
 
-def _param(value, key: str):
-    """One optional field parameter: a number, a positive integer or a cone name."""
-    name = key.rsplit(".", 1)[-1]
-    if name == "vo_cone":
-        return _string(value, key, VO_CONES)
-    if name == "vo_candidates":
-        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-            raise ScenarioError(key, "a positive integer", value)
-        return value
-    return _number(value, key)
-
-
 def _settings(d: dict) -> Settings:
-    """Validated [settings] table."""
+    """Validated [settings] table (every parameter range-checked against the table)."""
     if "settings" not in d:
         raise ScenarioError("settings", "a [settings] table (required)")
     s = _table(d["settings"], "settings", SETTINGS_KEYS)
-    method = _string(_required(s, "method", "settings", f"one of: {', '.join(METHODS)}"), "settings.method",
-                     METHODS)
-    kw = {}
-    if "dt" in s:
-        kw["dt"] = _ranged(s["dt"], "settings.dt", 0.0, 2.0, low_open=True)
-    if "t_max" in s:
-        kw["t_max"] = _ranged(s["t_max"], "settings.t_max", 0.0, 10000.0, low_open=True)
-    for key in ("r_safe", "collision_distance", "goal_tolerance"):
-        if key in s:
-            kw[key] = _ranged(s[key], f"settings.{key}", 0.0, None, low_open=True, unit="L")
-    params = {k: _param(s[k], f"settings.{k}") for k in PARAM_KEYS if k in s}
-    return Settings(method, params=params, **kw)
+    method = _string(_required(s, "method", "settings", f"one of: {', '.join(methods.NAMES)}"), "settings.method",
+                     methods.NAMES)
+    values = {k: check_value(k, v, field=f"settings.{k}", cls=ScenarioError) for k, v in s.items()
+              if k != "method"}
+    kw = {k: values.pop(k) for k in SETTINGS_FIELDS if k in values}
+    return Settings(method, params=values, **kw)
 
 
 def _ship(t: dict, i: int) -> ShipSpec:
@@ -330,7 +339,7 @@ def _ship(t: dict, i: int) -> ShipSpec:
     speed = _ranged(_required(t, "speed", p, _range_text(f"{p}.speed", lo, hi, unit=unit)), f"{p}.speed", lo, hi,
                     unit=unit)
     waypoints = _points(_required(t, "waypoints", p, "a list of waypoints [[x, y], ...]"), f"{p}.waypoints", 1)
-    method = _string(t["method"], f"{p}.method", METHODS) if "method" in t else None
+    method = _string(t["method"], f"{p}.method", methods.NAMES) if "method" in t else None
     stays = t.get("stays", False)
     if not isinstance(stays, bool):
         raise ScenarioError(f"{p}.stays", "true or false", stays)
@@ -409,6 +418,11 @@ def scenario_from_dict(d: dict, source: str = "<dict>") -> Scenario:
 def load_scenario(path) -> Scenario:
     """Read and validate a scenario TOML file.
 
+    Parameters
+    ----------
+    path : str or Path
+        The file (see the module docstring for its keys).
+
     A missing or unreadable file raises a :class:`ScenarioError` whose field is the path, a TOML syntax error
     one whose field is ``"toml"`` and whose message carries the parser's message.
 
@@ -442,8 +456,26 @@ def with_method(s: Scenario, method: str) -> Scenario:
     >>> with_method(s, "sink-vortex").settings.method
     'sink-vortex'
     """
-    method = _string(method, "method", METHODS)
+    method = _string(method, "method", methods.NAMES)
     return dataclasses.replace(s, settings=dataclasses.replace(s.settings, method=method))
+
+
+def with_params(s: Scenario, params: dict | None) -> Scenario:
+    """``s`` with parameter values written into its settings (so the scenario file carries them).
+
+    Examples
+    --------
+    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> t = with_params(s, {"r_safe": 10.0, "kp": 2.0})
+    >>> t.settings.r_safe, t.settings.params
+    (10.0, {'kp': 2.0})
+    """
+    if not params:
+        return s
+    values = {k: check_value(k, v, field=f"params.{k}") for k, v in params.items()}
+    kw = {k: values.pop(k) for k in SETTINGS_FIELDS if k in values}
+    settings = dataclasses.replace(s.settings, params={**s.settings.params, **values}, **kw)
+    return dataclasses.replace(s, settings=settings)
 
 
 def _ship_dict(ship: ShipSpec) -> dict:

@@ -2,7 +2,7 @@
 
 ``metrics.json`` schema (stable; distances in L, times non-dimensional L/U_des)::
 
-    {"method": str, "collision": bool, "t_end": float,
+    {"method": str, "collision": bool, "t_end": float, "params": {every parameter of the table, resolved},
      "ships": [{"name", "method", "status": "reached"|"diverged"|"stalled"|"timeout",
                 "reached_goal": bool, "time_to_goal": float|null, "ce": float, "mcte": float,
                 "collided": bool, "collision_time": float|null, "collision_with": str|null,
@@ -11,66 +11,89 @@
                 "encounter_b", "compliant_b", "t_enter"}]}
 
 ``encounter``/``compliant`` are from ship ``a``'s side (``encounter_b``/``compliant_b`` from ``b``'s);
-static obstacles appear as ``b = "obstacle<k>"`` with encounter ``"static"``.
+static obstacles appear as ``b = "obstacle<k>"`` with encounter ``"static"``. Outcome, CE and MCTE come from
+:meth:`mmg_casadi.closed_loop.ClosedLoopModel.outcomes` (``ce``/``mcte`` are null for a diverged ship).
 """
 
 from __future__ import annotations
 
-import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from . import colregs
-from .closed_loop import METHODS, PARAM_SOURCES, S_, Layout, default_globals, initial_state, pack_params
-from .errors import InputError, ScenarioError
-from .metrics import tracking_metrics
-from .model import propeller_rpm_for_speed
+from .closed_loop import build_problem
+from .errors import InputError
+from .io import json_safe, write_json
+from .scenario import Scenario, load_scenario, with_method
 from .simulation import Trajectory, simulate
-
-#: scenario ``[settings]`` / ``--params`` keys passed to :func:`~mmg_casadi.closed_loop.default_globals` as they are
-PARAM_KEYS = tuple(k for k in PARAM_SOURCES if k not in ("goal_tolerance", "gamma_max", "r_safe")) + ("ship_radius",)
-LAYOUT_KEYS = ("vo_candidates", "vo_cone")
-STALL_WINDOW = 50.0  #: no progress towards the goal for this long at t_max → "stalled"
-
-
-def load_params_file(path) -> dict:
-    """Field / guidance parameters from a TOML file (top level or a ``[params]`` table), e.g. from ``tune apf``."""
-    path = Path(path)
-    try:
-        raw = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError("--params", "an existing TOML file", str(path)) from None
-    except tomllib.TOMLDecodeError as e:
-        raise InputError("--params", f"valid TOML ({e})", str(path)) from None
-    raw = raw.get("params", raw)
-    allowed = set(PARAM_KEYS) | {"gamma_max_deg", "r_safe", "stall_window"} | set(LAYOUT_KEYS)
-    out = {}
-    for k, v in raw.items():
-        if k not in allowed:
-            raise InputError(f"params.{k}", f"one of: {', '.join(sorted(allowed))}", k)
-        if k == "vo_cone":
-            out[k] = v
-            continue
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise InputError(f"params.{k}", "a number", v)
-        out[k] = float(v)
-    return out
 
 
 @dataclass
 class ScenarioResult:
-    """A simulated scenario: the scenario, its trajectory and the assessed metrics (the JSON schema above)."""
+    """A simulated scenario: the scenario, its trajectory and the assessed metrics (the JSON schema above).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario that ran.
+    trajectory : Trajectory
+        Its rollout (states and auxiliary signals at every guidance step).
+    metrics : dict
+        The assessment (module docstring), JSON-ready.
+    encounter_labels : dict
+        Per ship index, the COLREG situations it met, for figure legends.
+    """
 
     scenario: object
     trajectory: Trajectory
     metrics: dict
     encounter_labels: dict = field(default_factory=dict)
 
+    @property
+    def params(self) -> dict:
+        """The resolved parameter set the scenario ran with."""
+        return self.metrics["params"]
+
     def names(self) -> list[str]:
+        """Ship names, own ship first."""
         return [s.name for s in self.scenario.ships]
+
+    def plot(self, ax=None):
+        """Draw the result; returns the figure.
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Draw the ships' paths (marine view) into ``ax``; without it a new figure with paths, rudder and
+            distance panels (as ``simulate`` saves) is made.
+        """
+        from .plotting import plot_paths, plot_scenario
+        if ax is None:
+            return plot_scenario(self)
+        plot_paths(self, ax)
+        return ax.figure
+
+    def to_frame(self):
+        """The per-ship metrics as a pandas DataFrame, one row per ship (index: ship name)."""
+        import pandas as pd
+        rows = [{k: v for k, v in s.items() if k != "stalled_at"} for s in self.metrics["ships"]]
+        return pd.DataFrame(rows).set_index("name")
+
+    def save(self, out, *, tracking: bool = False) -> Path:
+        """Write the files ``simulate`` writes (``trajectory.npz``, ``trajectory.csv``, ``scenario.png``,
+        ``metrics.json``) into directory ``out``; returns its path.
+
+        Parameters
+        ----------
+        out : str or Path
+            Output directory (created).
+        tracking : bool
+            Draw the waypoint-tracking figure instead of the encounter figure.
+        """
+        write_outputs(self, out, tracking=tracking)
+        return Path(out)
 
     def pair_distances(self) -> dict:
         """Distance histories ``{(a, b): d(t)}`` for every ship pair and ship–obstacle pair (NaN while a ship is
@@ -101,94 +124,103 @@ class ScenarioResult:
         return np.min(np.where(np.isnan(d), np.inf, d), axis=0)
 
 
-def build_problem(sc, params: dict | None = None):
-    """Layout, initial state and parameter vector of a scenario (``params`` override ``settings.params``)."""
-    st = sc.settings
-    merged = dict(getattr(st, "params", {}) or {})
-    merged.update(params or {})
-    methods = tuple(s.method or st.method for s in sc.ships)
-    for i, m in enumerate(methods):
-        if m not in METHODS:
-            raise ScenarioError(f"ships[{i}].method", f"one of: {', '.join(METHODS)}", m)
-    layout_kw = {}
-    if "vo_candidates" in merged:
-        layout_kw["vo_candidates"] = int(merged["vo_candidates"])
-    if "vo_cone" in merged:
-        layout_kw["vo_cone"] = str(merged["vo_cone"])
-    kmax = max(1 + len(s.waypoints) for s in sc.ships)
-    walls = []
-    for w in sc.walls:
-        pts = np.asarray(w.points, float)
-        walls += [(a[0], a[1], b[0], b[1]) for a, b in zip(pts[:-1], pts[1:])]
-    layout = Layout(methods=methods, n_obstacles=len(sc.obstacles), n_walls=len(walls), max_path=kmax,
-                    **layout_kw)
-    overrides = {k: float(v) for k, v in merged.items() if k in PARAM_KEYS}
-    if "gamma_max_deg" in merged:
-        overrides["gamma_max"] = math.radians(float(merged["gamma_max_deg"]))
-    # every override goes through default_globals, which range-checks it against its parameter dataclass
-    g = default_globals(dt=st.dt, r_safe=float(merged.get("r_safe", st.r_safe)),
-                        collision_distance=st.collision_distance,
-                        goal_tolerance=getattr(st, "goal_tolerance", 3.0), t_max=st.t_max, **overrides)
-    ships = []
-    for s in sc.ships:
-        ships.append({"n_rpm": propeller_rpm_for_speed(s.speed), "path": [s.start, *s.waypoints],
-                      "stays": s.stays, "start": s.start, "heading": math.radians(s.heading_deg),
-                      "speed": s.speed})
-    obstacles = [(o.position[0], o.position[1], o.radius) for o in sc.obstacles]
-    p = pack_params(layout, g, ships, obstacles, walls)
-    x0 = initial_state(layout, ships)
-    return layout, x0, p, g, merged
+def run_scenario(scenario, params: dict | None = None, *, method: str | None = None,
+                 profile=None) -> ScenarioResult:
+    """Simulate a scenario in the compiled closed loop and assess it.
+
+    Parameters
+    ----------
+    scenario : Scenario, str or Path
+        A scenario, or the path of a scenario TOML file (:func:`~mmg_casadi.scenario.load_scenario`).
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`); they win over the scenario's
+        ``[settings]``.
+    method : str, optional
+        Replace the scenario's ``settings.method`` (per-ship overrides are kept).
+    profile : ColregProfile, optional
+        COLREG sector thresholds of the assessment (default: the paper laboratory's).
+
+    Returns
+    -------
+    ScenarioResult
+        ``.metrics`` (the schema above), ``.trajectory``, ``.plot()``, ``.to_frame()``, ``.save(dir)``.
+
+    Examples
+    --------
+    >>> r = run_scenario(packaged_scenario("head_on"), params={"t_max": 5.0})
+    >>> r.metrics["params"]["t_max"], r.metrics["ships"][0]["status"]
+    (5.0, 'timeout')
+    """
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    if method is not None:
+        sc = with_method(sc, method)
+    problem = build_problem(sc, params)
+    traj = simulate(problem.layout, problem.x0, problem.p)
+    return assess(sc, traj, problem.params, profile=profile)
 
 
-def run_scenario(sc, params: dict | None = None, *, profile=None) -> ScenarioResult:
-    """Simulate ``sc`` and assess it (metrics.json schema in the module docstring)."""
-    layout, x0, p, g, merged = build_problem(sc, params)
-    traj = simulate(layout, x0, p)
-    return assess(sc, traj, g, stall_window=float(merged.get("stall_window", STALL_WINDOW)), profile=profile)
+def packaged_scenario(name: str) -> Scenario:
+    """A scenario shipped in ``mmg_casadi/data/scenarios/<name>.toml`` (head_on, crossing, overtaking, conflict,
+    static_obstacle, narrow_channel).
+
+    Parameters
+    ----------
+    name : str
+        File name without ``.toml``.
+
+    Examples
+    --------
+    >>> [s.name for s in packaged_scenario("crossing").ships]
+    ['ship1', 'ship2']
+    """
+    from importlib import resources
+    names = sorted(p.name[:-5] for p in resources.files("mmg_casadi").joinpath("data", "scenarios").iterdir()
+                   if p.name.endswith(".toml"))
+    if name not in names:
+        raise InputError("scenario", f"one of: {', '.join(names)}", name)
+    return load_scenario(resources.files("mmg_casadi").joinpath("data", "scenarios", f"{name}.toml"))
 
 
-def _ship_status(final, t_end, t_max, stall_window):
-    st = final[S_["status"]]
-    if st == 1:
-        return "reached", None
-    if st == 2:
-        return "diverged", None
-    if t_end - final[S_["t_best"]] >= stall_window:
-        return "stalled", [float(final[S_["x_best"]]), float(final[S_["y_best"]])]
-    return "timeout", None
+def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResult:
+    """Metrics of a trajectory: per-ship outcome, CE, MCTE, collisions; per-pair closest approach and COLREGs.
 
-
-def assess(sc, traj: Trajectory, g: dict, *, stall_window: float = STALL_WINDOW, profile=None) -> ScenarioResult:
-    """Metrics of a trajectory: per-ship outcome, CE, MCTE, collisions; per-pair closest approach and COLREGs."""
+    Parameters
+    ----------
+    sc : Scenario
+        The simulated scenario.
+    traj : Trajectory
+        Its rollout.
+    params : dict
+        The resolved parameter set it ran with (:func:`mmg_casadi.params.resolve`).
+    profile : ColregProfile, optional
+        COLREG sector thresholds (default: the paper laboratory's).
+    """
+    from .closed_loop import ClosedLoopModel
     profile = profile or colregs.ColregProfile()
+    g = {k: params[k] for k in ("r_safe", "collision_distance")}
     names = [s.name for s in sc.ships]
     N = len(names)
     S = len(sc.obstacles)
     agent_names = names + [f"obstacle{k}" for k in range(S)]
     mask = traj.sailing_mask()
     t_end = float(traj.t[-1])
+    final = np.concatenate([[t_end], traj.final.ravel()])
     ships = []
-    for i, s in enumerate(sc.ships):
-        fin = traj.final[i]
-        status, where = _ship_status(fin, t_end, g["t_max"], stall_window)
-        reached = traj.state("status", i)[1:] == 1
-        m = tracking_metrics(traj.t[:-1], traj.state("delta", i)[:-1], traj.auxiliary("y_e", i), reached,
-                             delta_max=g["delta_max"])
-        t_col = fin[S_["t_collision"]]
+    for i, (s, o) in enumerate(zip(sc.ships, ClosedLoopModel(traj.layout, params).outcomes(final))):
         ships.append({
             "name": s.name,
             "method": traj.layout.methods[i],
-            "status": status,
-            "reached_goal": status == "reached",
-            "time_to_goal": float(fin[S_["t_goal"]]) if status == "reached" else None,
-            "ce": float(m.ce),
-            "mcte": float(m.mcte),
-            "collided": bool(t_col >= 0),
-            "collision_time": float(t_col) if t_col >= 0 else None,
-            "collision_with": agent_names[int(fin[S_["collision_with"]])] if t_col >= 0 else None,
-            "min_distance": float(fin[S_["d_min"]]) if fin[S_["d_min"]] < 1e5 else None,
-            "stalled_at": where,
-            "reactive_time": float(fin[S_["reactive_time"]]),
+            "status": o["status"],
+            "reached_goal": o["status"] == "reached",
+            "time_to_goal": o["time_to_goal"],
+            "ce": o["ce"],
+            "mcte": o["mcte"],
+            "collided": o["collision_time"] is not None,
+            "collision_time": o["collision_time"],
+            "collision_with": None if o["collision_with"] is None else agent_names[o["collision_with"]],
+            "min_distance": o["min_distance"],
+            "stalled_at": None if o["stalled_at"] is None else list(o["stalled_at"]),
+            "reactive_time": o["reactive_time"],
         })
     pairs = []
     labels: dict = {}
@@ -216,20 +248,28 @@ def assess(sc, traj: Trajectory, g: dict, *, stall_window: float = STALL_WINDOW,
                           "compliant": None, "encounter_b": None, "compliant_b": None, "t_enter": None})
     collision = any(p["min_distance"] < g["collision_distance"] for p in pairs)
     metrics = {"method": sc.settings.method, "collision": bool(collision), "t_end": t_end,
-               "ships": ships, "pairs": pairs}
-    return ScenarioResult(sc, traj, metrics, labels)
+               "params": dict(params), "ships": ships, "pairs": pairs}
+    return ScenarioResult(sc, traj, json_safe(metrics), labels)
 
 
 def write_outputs(res: ScenarioResult, out, *, figure_name: str = "scenario.png", tracking: bool = False) -> None:
-    """Write ``trajectory.npz``, ``trajectory.csv``, ``metrics.json`` and the figure(s) into ``out``."""
-    from .cli import write_json
+    """Write ``trajectory.npz``, ``trajectory.csv``, ``metrics.json`` and the figure into ``out``.
+
+    Parameters
+    ----------
+    res : ScenarioResult
+        The result to save.
+    out : str or Path
+        Output directory (created).
+    figure_name : str
+        File name of the figure.
+    tracking : bool
+        Draw the waypoint-tracking figure instead of the encounter figure.
+    """
     from .plotting import plot_scenario, plot_tracking
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     res.trajectory.to_npz(out / "trajectory.npz")
     res.trajectory.to_csv(out / "trajectory.csv", names=res.names())
-    if tracking:
-        plot_tracking(res, out / figure_name)
-    else:
-        plot_scenario(res, out / figure_name)
+    (plot_tracking if tracking else plot_scenario)(res, out / figure_name)
     write_json(out / "metrics.json", res.metrics)

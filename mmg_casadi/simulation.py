@@ -60,9 +60,10 @@ def _finished(layout: Layout, x: np.ndarray, t_max) -> np.ndarray:
 class Trajectory:
     """History of one closed-loop rollout.
 
-    Attributes
+    Parameters
     ----------
     layout : Layout
+        Shape of the closed loop.
     t : ndarray (T+1,)
         Times of the stored states (non-dimensional).
     states : ndarray (T+1, N, NS)
@@ -77,12 +78,28 @@ class Trajectory:
     aux: np.ndarray
 
     def state(self, name: str, ship: int | None = None) -> np.ndarray:
-        """History of one state variable, ``(T+1, N)`` or ``(T+1,)`` for one ship."""
+        """History of one state variable, ``(T+1, N)`` or ``(T+1,)`` for one ship.
+
+        Parameters
+        ----------
+        name : str
+            A name of :data:`~mmg_casadi.closed_loop.SHIP_STATE`.
+        ship : int, optional
+            Ship index; all ships if omitted.
+        """
         col = self.states[:, :, S_[name]]
         return col if ship is None else col[:, ship]
 
     def auxiliary(self, name: str, ship: int | None = None) -> np.ndarray:
-        """History of one auxiliary signal (``delta_c``, ``psi_d``, ``y_e``, ``reactive``), ``(T, N)``."""
+        """History of one auxiliary signal, ``(T, N)`` or ``(T,)`` for one ship.
+
+        Parameters
+        ----------
+        name : str
+            ``delta_c``, ``psi_d``, ``y_e`` or ``reactive``.
+        ship : int, optional
+            Ship index; all ships if omitted.
+        """
         col = self.aux[:, :, AUX.index(name)]
         return col if ship is None else col[:, ship]
 
@@ -103,11 +120,26 @@ class Trajectory:
         return mask
 
     def to_npz(self, path) -> None:
+        """Save times, states and auxiliary signals (with their names) as a compressed ``.npz``.
+
+        Parameters
+        ----------
+        path : str or Path
+            Destination file.
+        """
         np.savez_compressed(path, t=self.t, states=self.states, aux=self.aux,
                             state_names=np.array(SHIP_STATE), aux_names=np.array(AUX))
 
     def to_csv(self, path, names=None) -> None:
-        """Long-format CSV: one row per (time, ship) with the MMG state and the auxiliary signals."""
+        """Long-format CSV: one row per (time, ship) with the MMG state and the auxiliary signals.
+
+        Parameters
+        ----------
+        path : str or Path
+            Destination file.
+        names : list of str, optional
+            Ship names (default ``ship0``, ``ship1``, ...).
+        """
         names = names or [f"ship{i}" for i in range(self.layout.n_ships)]
         cols = ["u", "v", "r", "x", "y", "psi", "delta", "status"]
         aux = np.concatenate([self.aux, self.aux[-1:]], axis=0) if len(self.aux) else np.zeros(
@@ -121,7 +153,19 @@ class Trajectory:
 
 
 def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200) -> Trajectory:
-    """Roll out one scenario until every ship has finished or ``t_max`` (in ``p``) is reached."""
+    """Roll out one scenario until every ship has finished or ``t_max`` (in ``p``) is reached.
+
+    Parameters
+    ----------
+    layout : Layout
+        Shape of the closed loop.
+    x0 : ndarray (nx,)
+        Initial scenario state (:func:`~mmg_casadi.closed_loop.initial_state`).
+    p : ndarray (np,)
+        Parameter vector (:func:`~mmg_casadi.closed_loop.pack_params`).
+    chunk : int
+        Steps per compiled ``mapaccum`` call.
+    """
     F = _chunk(layout, chunk, 1)
     t_max = float(p[GLOBAL_PARAMS.index("t_max")])
     xs, auxs = [np.asarray(x0, float)[:, None]], []

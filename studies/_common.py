@@ -1,7 +1,8 @@
-"""Shared plumbing of the paper's studies: run one scenario for several methods and write the outputs.
+"""Shared plumbing of the paper's studies: run scenarios for several methods and write the outputs.
 
 Each study writes ``<out>/<case>/<method>/`` (trajectory npz/CSV, figure, per-run metrics.json), a comparison
-figure per case, and ``<out>/metrics.json`` shaped ``{"cases": {CASE: {METHOD: <simulate schema>}}}``.
+figure per case, and ``<out>/metrics.json`` shaped ``{"params": {...}, "cases": {CASE: {METHOD: <simulate
+schema>}}}`` with the full resolved parameter set the study ran with.
 """
 
 from __future__ import annotations
@@ -12,48 +13,39 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from mmg_casadi.cli import write_json
+from mmg_casadi import methods as registry
+from mmg_casadi.io import write_json
+from mmg_casadi.params import resolve
 from mmg_casadi.plotting import COLORS, draw_circle, draw_goal, draw_path, marine_axes
-from importlib import resources
+from mmg_casadi.scenario import with_method
+from mmg_casadi.scenario_run import run_scenario, write_outputs
 
-from mmg_casadi.scenario import load_scenario, scenario_from_dict, with_method
-from mmg_casadi.scenario_run import load_params_file, run_scenario, write_outputs
-
-ALL_METHODS = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle")
-APF_AND_VO = ("inverse-square", "modified-vortex", "velocity-obstacle")
-
-
-def ship(name, start, heading, speed, waypoints, **kw) -> dict:
-    """A ``[[ships]]`` entry (heading in degrees, speed as a fraction of design speed)."""
-    return {"name": name, "start": list(start), "heading": heading, "speed": speed,
-            "waypoints": [list(w) for w in waypoints], **kw}
+ALL_METHODS = tuple(m for m in registry.AVOIDING)
+"""Every avoiding method of the registry."""
+APF_AND_VO = tuple(m for m in registry.AVOIDING if m != "sink-vortex")
+"""The methods of the paper's conflict study."""
 
 
-def scenario(ships, obstacles=(), walls=(), *, method="modified-vortex", t_max=300.0, **settings):
-    d = {"settings": {"method": method, "dt": 0.25, "t_max": t_max, "r_safe": 15.0, "collision_distance": 2.0,
-                      **settings},
-         "ships": list(ships), "obstacles": list(obstacles), "walls": list(walls)}
-    return scenario_from_dict(d, source="study")
+def run_cases(cases: dict, methods, out, params=None, *, title: str = "") -> dict:
+    """Run every case for every method; write per-run outputs, a comparison figure per case and metrics.json.
 
-
-def packaged(name: str):
-    """A scenario shipped in ``mmg_casadi/data/scenarios/<name>.toml`` (the files double as examples)."""
-    return load_scenario(resources.files("mmg_casadi").joinpath("data", "scenarios", f"{name}.toml"))
-
-
-def methods_for(args, default):
-    return tuple(args.methods) if getattr(args, "methods", None) else default
-
-
-def params_for(args):
-    return load_params_file(args.params) if getattr(args, "params", None) else None
-
-
-def run_cases(cases: dict, methods, out: Path, params=None, *, title: str = "") -> dict:
-    """Run every case for every method; write per-run outputs, a comparison figure per case and metrics.json."""
+    Parameters
+    ----------
+    cases : dict
+        Case name → Scenario.
+    methods : iterable of str
+        Methods to run each case with.
+    out : str or Path
+        Output directory.
+    params : dict, optional
+        Parameter overrides for every run.
+    title : str
+        Figure title prefix.
+    """
     out = Path(out)
+    methods = registry.parse_list(methods)
     results = {}
-    metrics = {"cases": {}}
+    metrics = {"params": resolve(params, prefix="params."), "cases": {}}
     for case, sc in cases.items():
         metrics["cases"][case] = {}
         results[case] = {}
@@ -87,10 +79,10 @@ def plot_comparison(by_method: dict, path, title="") -> Figure:
             draw_path(ax, tr.state("x", i)[k], tr.state("y", i)[k], tr.state("psi", i)[k], c, label=lab,
                       n_outlines=5)
             g = s.waypoints[-1]
-            draw_goal(ax, g[0], g[1], c, tol=sc.settings.goal_tolerance)
+            draw_goal(ax, g[0], g[1], c, tol=r.params["goal_tolerance"])
         for o in sc.obstacles:
             ax.plot(o.position[1], o.position[0], "ko", ms=4)
-            draw_circle(ax, o.position[0], o.position[1], sc.settings.r_safe, color="r", lw=0.8)
+            draw_circle(ax, o.position[0], o.position[1], r.params["r_safe"], color="r", lw=0.8)
         for w in sc.walls:
             pts = np.asarray(w.points)
             ax.plot(pts[:, 1], pts[:, 0], "k-", lw=2)
@@ -100,10 +92,11 @@ def plot_comparison(by_method: dict, path, title="") -> Figure:
         ax.legend(fontsize=7, loc="best")
         a2 = fig.add_subplot(gs[1, col])
         for (a, b), d in r.pair_distances().items():
-            inside = d <= sc.settings.r_safe
+            inside = d <= r.params["r_safe"]
             if np.any(inside):
                 a2.plot(tr.t, np.where(inside, d, np.nan), label=f"{a}–{b}")
-        a2.axhline(sc.settings.collision_distance, color="k", ls="--", lw=1, label="2 L")
+        cd = r.params["collision_distance"]
+        a2.axhline(cd, color="k", ls="--", lw=1, label=f"{cd:g} L")
         a2.set_xlabel("t [L/U]")
         a2.set_ylabel("distance inside R_safe [L]")
         a2.grid(True, alpha=0.3)

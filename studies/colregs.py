@@ -7,12 +7,11 @@ Overtaking: the paper gives no positions; the overtaken ship runs at half speed 
 
 from __future__ import annotations
 
-from ._common import ALL_METHODS, methods_for, packaged, params_for, run_cases
+from mmg_casadi.encounters import colregs_cases
+
+from ._common import ALL_METHODS, run_cases
 
 
-def cases() -> dict:
-    return {"overtaking": packaged("overtaking"), "head-on": packaged("head_on"), "crossing": packaged("crossing")}
-
-
-def run(args, out) -> dict:
-    return run_cases(cases(), methods_for(args, ALL_METHODS), out, params_for(args), title="COLREGs")
+def run(out, *, methods=None, params=None) -> dict:
+    """Run the three encounters for ``methods`` (default: every avoiding method) with ``params``."""
+    return run_cases(colregs_cases(), methods or ALL_METHODS, out, params, title="COLREGs")

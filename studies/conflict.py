@@ -4,12 +4,11 @@
 
 from __future__ import annotations
 
-from ._common import APF_AND_VO, methods_for, packaged, params_for, run_cases
+from mmg_casadi.encounters import conflict_cases
+
+from ._common import APF_AND_VO, run_cases
 
 
-def cases() -> dict:
-    return {"three-ships": packaged("conflict")}
-
-
-def run(args, out) -> dict:
-    return run_cases(cases(), methods_for(args, APF_AND_VO), out, params_for(args), title="conflict")
+def run(out, *, methods=None, params=None) -> dict:
+    """Run the three-ship conflict for ``methods`` (default: the paper's APFs and the VO) with ``params``."""
+    return run_cases(conflict_cases(), methods or APF_AND_VO, out, params, title="conflict")

@@ -5,15 +5,13 @@ within 2 L, 5 L either side of the diagonal (``data/scenarios/narrow_channel.tom
 
 from __future__ import annotations
 
-from ._common import methods_for, packaged, params_for, run_cases
+from mmg_casadi.encounters import narrow_channel_cases
+
+from ._common import APF_AND_VO, run_cases
 
 HALF_WIDTH = 5.0  #: L, half the channel width of the shipped scenario
 
 
-def cases() -> dict:
-    return {"head-on": packaged("narrow_channel")}
-
-
-def run(args, out) -> dict:
-    return run_cases(cases(), methods_for(args, ("modified-vortex", "inverse-square", "velocity-obstacle")),
-                     out, params_for(args), title="narrow channel")
+def run(out, *, methods=None, params=None) -> dict:
+    """Run the channel case for ``methods`` (default: the paper's APFs and the VO) with ``params``."""
+    return run_cases(narrow_channel_cases(), methods or APF_AND_VO, out, params, title="narrow channel")

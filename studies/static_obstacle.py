@@ -6,21 +6,11 @@ the paper's sink-vortex failure mode (its coordinates are not given).
 
 from __future__ import annotations
 
-import dataclasses
+from mmg_casadi.encounters import static_obstacle_cases
 
-from ._common import ALL_METHODS, methods_for, packaged, params_for, run_cases
-
-
-def cases() -> dict:
-    base = packaged("static_obstacle")
-    own = base.ships[0]
-    return {
-        "goal-50": base,
-        "goal-60": dataclasses.replace(base, ships=(dataclasses.replace(own, waypoints=((60.0, 0.0),)),)),
-        "starboard-bow": dataclasses.replace(base, obstacles=(dataclasses.replace(base.obstacles[0],
-                                                                                   position=(25.0, 1.5)),)),
-    }
+from ._common import ALL_METHODS, run_cases
 
 
-def run(args, out) -> dict:
-    return run_cases(cases(), methods_for(args, ALL_METHODS), out, params_for(args), title="static obstacle")
+def run(out, *, methods=None, params=None) -> dict:
+    """Run the three static-obstacle cases for ``methods`` (default: every avoiding method) with ``params``."""
+    return run_cases(static_obstacle_cases(), methods or ALL_METHODS, out, params, title="static obstacle")

@@ -12,7 +12,12 @@ import pytest
 from mmg_casadi.cli import main
 from mmg_casadi.scenario import with_method
 from mmg_casadi.scenario_run import run_scenario
-from studies import colregs, conflict, narrow_channel, static_obstacle
+from mmg_casadi import encounters
+from studies import narrow_channel
+
+static_obstacle, colregs, conflict = (encounters.static_obstacle_cases, encounters.colregs_cases,
+                                      encounters.conflict_cases)
+narrow = encounters.narrow_channel_cases
 
 _CACHE = {}
 
@@ -20,7 +25,7 @@ _CACHE = {}
 def result(study, case, method):
     key = (study.__name__, case, method)
     if key not in _CACHE:
-        _CACHE[key] = run_scenario(with_method(study.cases()[case], method))
+        _CACHE[key] = run_scenario(with_method(study()[case], method))
     return _CACHE[key]
 
 
@@ -118,7 +123,7 @@ def test_conflict_modified_vortex_is_collision_free_and_inverse_square_is_not():
 
 
 def test_narrow_channel_both_pass_without_collision_inside_the_channel():
-    r = result(narrow_channel, "head-on", "modified-vortex")
+    r = result(narrow, "head-on", "modified-vortex")
     assert not r.metrics["collision"]
     assert all(s["reached_goal"] for s in r.metrics["ships"])
     mask = r.trajectory.sailing_mask()
@@ -131,7 +136,7 @@ def test_narrow_channel_both_pass_without_collision_inside_the_channel():
 # --- velocity obstacle in every study, schema ------------------------------------------------------------------
 
 @pytest.mark.parametrize("study,case", [(static_obstacle, "goal-50"), (colregs, "head-on"), (colregs, "crossing"),
-                                        (conflict, "three-ships"), (narrow_channel, "head-on")])
+                                        (conflict, "three-ships"), (narrow, "head-on")])
 def test_velocity_obstacle_runs_and_metrics_say_what_happened(study, case):
     r = result(study, case, "velocity-obstacle")
     m = r.metrics

@@ -42,8 +42,8 @@ def test_ilos_params_defaults_and_gains():
 
 
 @pytest.mark.parametrize("kwargs, field", [
-    ({"delta": 0.0}, "delta"), ({"delta": -1.0}, "delta"), ({"k": -0.01}, "k"),
-    ({"r_tol": 0.0}, "r_tol"), ({"delta": float("nan")}, "delta"),
+    ({"delta": 0.0}, "ilos_delta"), ({"delta": -1.0}, "ilos_delta"), ({"k": -0.01}, "ilos_k"),
+    ({"r_tol": 0.0}, "goal_tolerance"), ({"delta": float("nan")}, "ilos_delta"),
 ])
 def test_ilos_params_validation(kwargs, field):
     with pytest.raises(ParameterError) as err:

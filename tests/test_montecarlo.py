@@ -12,7 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop import NS, S_, Layout, default_globals, initial_state
+from mmg_casadi.closed_loop import NS, S_, ClosedLoopModel, Layout, initial_state
+from mmg_casadi.params import resolve
 from mmg_casadi.errors import InputError
 from mmg_casadi.montecarlo import (
     TIMING_COLUMNS,
@@ -46,8 +47,8 @@ def _comparable(rows):
     return out
 
 
-def _tasks(batch=2, t_max=300.0):
-    return [BatchTask(1, METHOD, tuple(RUNS[i:i + batch]), SEED, t_max) for i in range(0, len(RUNS), batch)]
+def _tasks(batch=2):
+    return [BatchTask(1, METHOD, tuple(RUNS[i:i + batch]), SEED) for i in range(0, len(RUNS), batch)]
 
 
 @pytest.fixture(scope="module")
@@ -124,11 +125,15 @@ def test_resume_refuses_another_seed_or_horizon(tmp_path):
     run_study(tmp_path, runs=1, envs="1", methods=(METHOD,), base_seed=SEED, workers=1, progress=False)
     with pytest.raises(InputError) as err:
         run_study(tmp_path, runs=1, envs="1", methods=(METHOD,), base_seed=SEED + 1, workers=1, progress=False)
-    assert err.value.field == "--seed"
+    assert err.value.field == "base_seed"
     with pytest.raises(InputError) as err:
-        run_study(tmp_path, runs=1, envs="1", methods=(METHOD,), base_seed=SEED, t_max=100.0, workers=1,
-                  progress=False)
-    assert err.value.field == "t_max"
+        run_study(tmp_path, runs=1, envs="1", methods=(METHOD,), base_seed=SEED, params={"t_max": 100.0},
+                  workers=1, progress=False)
+    assert err.value.field == "params.t_max"
+    with pytest.raises(InputError) as err:
+        run_study(tmp_path, runs=1, envs="1", methods=(METHOD,), base_seed=SEED, params={"r_safe": 3.0},
+                  workers=1, progress=False)
+    assert err.value.field == "params.r_safe" and "15.0" in str(err.value)
 
 
 def _ship(name, start, heading, goal, speed=1.0):
@@ -191,14 +196,16 @@ def _final_state(layout, **own):
 
 def test_classify_stalled_diverged_from_final_state():
     layout = Layout(methods=("none",))
-    g = default_globals()
-    r = classify(layout, _final_state(layout, t_best=200.0), g)
+    model = ClosedLoopModel(layout, resolve())
+    r = classify(model, _final_state(layout, t_best=200.0))
     assert r["failure"] == "stalled" and r["failure_time"] == 200.0
-    assert classify(layout, _final_state(layout, t_best=280.0), g)["failure"] == "timeout"
-    r = classify(layout, _final_state(layout, status=2.0), g)
+    assert classify(model, _final_state(layout, t_best=280.0))["failure"] == "timeout"
+    assert classify(ClosedLoopModel(layout, resolve({"stall_window": 10.0})),
+                    _final_state(layout, t_best=280.0))["failure"] == "stalled"
+    r = classify(model, _final_state(layout, status=2.0))
     assert r["failure"] == "diverged" and math.isnan(r["ce"])
-    r = classify(layout, _final_state(layout, status=1.0, t_goal=90.0, ce_int=0.2 * math.radians(35) * 90.0,
-                                      mcte_int=45.0), g)
+    r = classify(model, _final_state(layout, status=1.0, t_goal=90.0, ce_int=0.2 * math.radians(35) * 90.0,
+                                     mcte_int=45.0))
     assert r["success"] and r["ce"] == pytest.approx(0.2) and r["mcte"] == pytest.approx(0.5)
     assert NS == len(_final_state(layout)) - 1
 
@@ -206,9 +213,10 @@ def test_classify_stalled_diverged_from_final_state():
 def _own_mcte_from_states(res):
     """Own-ship MCTE of a run_scenario trajectory with y_e re-evaluated by the step at every stored state."""
     from mmg_casadi.metrics import tracking_metrics
-    from mmg_casadi.scenario_run import build_problem
+    from mmg_casadi.closed_loop import build_problem
     from mmg_casadi.simulation import compiled_step
-    layout, _x0, p, g, _ = build_problem(res.scenario)
+    pr = build_problem(res.scenario)
+    layout, p, g = pr.layout, pr.p, pr.model.values
     tr = res.trajectory
     X = np.vstack([tr.t[None, :-1], tr.states[:-1].reshape(len(tr.t) - 1, -1).T])
     T = X.shape[1]
@@ -228,27 +236,35 @@ def test_batch_ce_mcte_agree_with_run_scenario(reference_rows):
         if not own["reached_goal"]:
             continue
         assert row["time_to_goal"] == own["time_to_goal"]
-        assert row["ce"] == pytest.approx(own["ce"], rel=0.02), f"run {row['run']} CE"
+        # one definition (the compiled accumulators): batch rows and single runs agree exactly
+        assert row["ce"] == own["ce"] and row["mcte"] == own["mcte"], f"run {row['run']}"
         reached = [s for s in res.metrics["ships"] if s["reached_goal"]]
-        assert row["fleet_ce"] == pytest.approx(np.mean([s["ce"] for s in reached]), rel=0.02)
-        # MCTE: same definition as run_scenario (trapezoid of |y_e| up to the goal), y_e evaluated afresh
+        assert row["fleet_ce"] == pytest.approx(np.mean([s["ce"] for s in reached]), rel=1e-12)
+        # check against the trajectory definition (trapezoid of |delta| and |y_e| up to the goal)
+        from mmg_casadi.metrics import tracking_metrics
+        tr = res.trajectory
+        ref = tracking_metrics(tr.t[:-1], tr.state("delta", 0)[:-1], tr.auxiliary("y_e", 0),
+                               tr.state("status", 0)[1:] == 1, delta_max=math.radians(35.0))
+        assert row["ce"] == pytest.approx(ref.ce, rel=0.02), f"run {row['run']} CE"
         mcte_ref, y_e = _own_mcte_from_states(res)
         assert row["mcte"] == pytest.approx(mcte_ref, rel=0.02), f"run {row['run']} MCTE"
         np.testing.assert_allclose(res.trajectory.auxiliary("y_e", 0), y_e, atol=1e-9)
-        assert row["mcte"] == pytest.approx(own["mcte"], rel=0.02), f"run {row['run']} MCTE vs run_scenario"
         checked += 1
     assert checked >= 2
 
 
 @pytest.mark.parametrize("kwargs, field", [
-    ({"runs": 0}, "--runs"),
-    ({"runs": 2.5}, "--runs"),
-    ({"backend": "x"}, "--backend"),
-    ({"methods": ("modified-vortex", "nope")}, "--methods"),
-    ({"envs": "0-2"}, "--envs"),
-    ({"envs": (6,)}, "--envs"),
-    ({"base_seed": -1}, "--seed"),
-    ({"workers": 0}, "--workers"),
+    ({"runs": 0}, "runs"),
+    ({"runs": 2.5}, "runs"),
+    ({"backend": "x"}, "backend"),
+    ({"methods": ("modified-vortex", "nope")}, "methods"),
+    ({"envs": "0-2"}, "envs"),
+    ({"envs": (6,)}, "envs"),
+    ({"base_seed": -1}, "base_seed"),
+    ({"workers": 0}, "workers"),
+    ({"params": {"kd": -1.0}}, "params.kd"),
+    ({"params": {"nope": 1.0}}, "params.nope"),
+    ({"address": "x:1"}, "address"),
 ])
 def test_bad_input_names_the_field(tmp_path, kwargs, field):
     out = tmp_path / "out"
@@ -274,7 +290,7 @@ def test_one_study_per_output_directory(tmp_path):
     with _exclusive(tmp_path):
         with pytest.raises(InputError) as err:
             run_study(tmp_path, runs=1, envs="1", methods=(METHOD,), workers=1, progress=False)
-    assert err.value.field == "--out"
+    assert err.value.field == "out_dir"
 
 
 def test_scenarios_with_different_horizons_share_a_batch():

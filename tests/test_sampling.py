@@ -202,4 +202,4 @@ def test_parse_envs(text, expected):
 def test_parse_envs_rejects(text):
     with pytest.raises(InputError) as err:
         parse_envs(text)
-    assert err.value.field == "--envs"
+    assert err.value.field == "envs"

@@ -9,8 +9,8 @@ from importlib.resources import files
 import pytest
 
 from mmg_casadi.errors import InputError, ScenarioError
+from mmg_casadi.methods import NAMES as METHODS
 from mmg_casadi.scenario import (
-    METHODS,
     ObstacleSpec,
     Scenario,
     Settings,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mmg_casadi.cli import main
-from mmg_casadi.scenario_run import load_params_file
+from mmg_casadi.params import load_file as load_params_file
 from tuning import apf
 
 SCENARIOS = resources.files("mmg_casadi").joinpath("data", "scenarios")

@@ -12,7 +12,8 @@ from mmg_casadi.model import propeller_rpm_for_speed
 from mmg_casadi.scenario import scenario_from_dict
 from mmg_casadi.scenario_run import run_scenario
 from mmg_casadi.simulation import simulate
-from studies.waypoint_square import PAPER, square_scenario
+from mmg_casadi.encounters import waypoint_square as square_scenario
+from studies.waypoint_square import PAPER
 
 
 @pytest.fixture(scope="module")
@@ -92,7 +93,7 @@ def test_gains_are_parameters_from_python_and_cli(tmp_path):
     import json
     m = json.loads((tmp_path / "sq" / "metrics.json").read_text())
     assert {"ce", "mcte", "time_to_goal"} <= set(m)
-    assert m["parameters"]["kp"] == 2.5 and m["parameters"]["kd"] == 3.0
+    assert m["params"]["kp"] == 2.5 and m["params"]["kd"] == 3.0 and m["params"]["ilos_k"] == 0.05
     assert (tmp_path / "sq" / "waypoint_square.png").stat().st_size > 10000
 
 

@@ -162,12 +162,10 @@ class TuningConfig:
 
 
 def paper_encounters() -> dict:
-    """The paper's encounters used for training: static obstacle (goal 50 L), head-on, crossing, overtaking and
-    the three-ship conflict, all with the modified sink-vortex."""
-    from studies import colregs, conflict, static_obstacle
-    cases = {"static-obstacle": static_obstacle.cases()["goal-50"], **colregs.cases(),
-             "conflict": conflict.cases()["three-ships"]}
-    return {k: with_method(v, METHOD) for k, v in cases.items()}
+    """The paper's encounters used for training (:func:`mmg_casadi.encounters.paper_encounters`), all with the
+    modified sink-vortex."""
+    from mmg_casadi.encounters import paper_encounters as cases
+    return {k: with_method(v, METHOD) for k, v in cases().items()}
 
 
 def sampled_scenario(env: int, run: int, base_seed: int):
@@ -180,7 +178,7 @@ def training_scenarios(n_sampled: int, *, paper: bool = True, envs=(1, 2), base_
     """Training set: the paper's encounters (``paper``) plus ``n_sampled`` Monte Carlo scenarios drawn
     alternately from ``envs`` with ``base_seed``."""
     if isinstance(n_sampled, bool) or not isinstance(n_sampled, int) or n_sampled < 0:
-        raise InputError("--train", "an integer >= 0", n_sampled)
+        raise InputError("train", "an integer >= 0", n_sampled)
     out = dict(paper_encounters()) if paper else {}
     for k in range(n_sampled):
         env = envs[k % len(envs)]
@@ -223,7 +221,9 @@ def _theta_params(p_num: np.ndarray, theta):
 def prepare_case(name: str, sc, config: TuningConfig = TuningConfig()) -> TrainingCase:
     """Exact rollout at the paper's values (for the horizon), then the smooth layout and numeric parameters."""
     from mmg_casadi.simulation import simulate
-    layout, x0, p, g, _ = build_problem(sc, dict(zip(THETA, PAPER)))
+    pr = build_problem(sc, dict(zip(THETA, PAPER)))
+    layout, x0, p = pr.layout, pr.x0, pr.p
+    g = pr.model.values
     tr = simulate(layout, x0, p)
     t_end = float(tr.t[-1])
     d_min = float(np.min(tr.final[:, S_["d_min"]]))
@@ -557,57 +557,43 @@ def write_params_toml(result: TuningResult | dict, path) -> None:
 # evaluation with the exact closed loop
 
 
-def classify_final(layout: Layout, xf: np.ndarray) -> dict:
-    """Outcome of the own ship from a final scenario state: ``success`` (reached its goal, never closer than
-    the collision distance), ``failure`` (``""``, ``collision``, ``diverged``, ``timeout``), CE and MCTE over
-    the voyage (T = time to goal, or the final time if the goal was not reached)."""
-    own = np.asarray(xf)[1:1 + NS]
-    t_end = float(xf[0])
-    status = own[S_["status"]]
-    collided = own[S_["t_collision"]] >= 0
-    success = bool(status == 1 and not collided)
-    failure = "" if success else "collision" if collided else "diverged" if status == 2 else "timeout"
-    T = float(own[S_["t_goal"]]) if status == 1 else t_end
-    return {"success": success, "failure": failure, "ce_int": float(own[S_["ce_int"]]),
-            "mcte_int": float(own[S_["mcte_int"]]), "T": T}
-
-
 def evaluate(param_sets: dict, *, envs=(1, 2, 3, 4, 5), runs: int = 40, base_seed: int = HOLDOUT_SEED,
              report=_stderr) -> dict:
     """Exact closed loop on the held-out scenarios: for every environment, ``runs`` scenarios drawn with
     ``base_seed`` and every parameter set of ``param_sets`` (name -> {k_vor0, lam_sink, r_safe}) in one batch
     (:func:`mmg_casadi.simulation.simulate_batch`). Returns ``{env: {name: summary}}`` with success rate and
     its Wilson 95 % interval, failures by kind, and mean CE / MCTE of the own ship over its successful runs."""
+    from mmg_casadi.montecarlo import classify
     from mmg_casadi.results import wilson_interval
     from mmg_casadi.simulation import simulate_batch
     if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
-        raise InputError("--holdout", "an integer >= 1", runs)
+        raise InputError("holdout", "an integer >= 1", runs)
     out = {}
     names = list(param_sets)
     for env in envs:
         t0 = time.perf_counter()
-        layout, X0, P, dmax = None, [], [], None
+        layout, X0, P, models = None, [], [], []
         for name in names:
             for run in range(runs):
-                sc = sampled_scenario(env, run, base_seed)
-                lay, x0, p, g, _ = build_problem(sc, dict(param_sets[name]))
+                pr = build_problem(sampled_scenario(env, run, base_seed), dict(param_sets[name]))
                 if layout is None:
-                    layout, dmax = lay, g["delta_max"]
-                elif lay != layout:
+                    layout = pr.layout
+                elif pr.layout != layout:
                     raise RuntimeError(f"environment {env}: scenarios of different shape")
-                X0.append(x0)
-                P.append(p)
+                X0.append(pr.x0)
+                P.append(pr.p)
+                models.append(pr.model)
         if report:
             report(f"  env {env}: {len(X0)} runs ({layout.n_ships} ships, {layout.n_obstacles} obstacles) ...")
         XF, busy = simulate_batch(layout, np.column_stack(X0), np.column_stack(P))
         res = {}
         for a, name in enumerate(names):
-            rows = [classify_final(layout, XF[:, a * runs + r]) for r in range(runs)]
+            rows = [classify(models[a * runs + r], XF[:, a * runs + r]) for r in range(runs)]
             k = sum(r["success"] for r in rows)
             lo, hi = wilson_interval(int(k), int(runs))
-            ok = [r for r in rows if r["success"] and r["T"] > 0]
-            ce = float(np.mean([r["ce_int"] / (dmax * r["T"]) for r in ok])) if ok else float("nan")
-            mcte = float(np.mean([r["mcte_int"] / r["T"] for r in ok])) if ok else float("nan")
+            ok = [r for r in rows if r["success"]]
+            ce = float(np.mean([r["ce"] for r in ok])) if ok else float("nan")
+            mcte = float(np.mean([r["mcte"] for r in ok])) if ok else float("nan")
             fails = {}
             for r in rows:
                 if r["failure"]:

@@ -14,6 +14,9 @@ import time
 from pathlib import Path
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.io import write_json
+from mmg_casadi.params import PARAMETERS, resolve
+from mmg_casadi.scenario import with_params
 
 from . import apf
 
@@ -28,18 +31,39 @@ def _count(name: str, value, low: int) -> int:
     return value
 
 
-def run(args, config: apf.TuningConfig | None = None, envs=(1, 2, 3, 4, 5)) -> dict:
-    """Run the tuning and the held-out evaluation; return the report (also written to ``args.out``)."""
-    from mmg_casadi.cli import write_json
-    train = _count("--train", getattr(args, "train", 8), 0)
-    holdout = _count("--holdout", getattr(args, "holdout", 40), 1)
-    out = Path(args.out)
+def _non_default(params: dict | None) -> dict:
+    return {k: v for k, v in (params or {}).items() if v != PARAMETERS[k].default}
+
+
+def run(out, *, train: int = 8, holdout: int = 40, params: dict | None = None,
+        config: apf.TuningConfig | None = None, envs=(1, 2, 3, 4, 5)) -> dict:
+    """Run the tuning and the held-out evaluation; return the report (also written to ``out``).
+
+    Parameters
+    ----------
+    out : str or Path
+        Output directory (``params.toml``, ``report.json``).
+    train : int
+        Sampled training scenarios (plus the paper's five encounters).
+    holdout : int
+        Held-out scenarios per environment.
+    params : dict, optional
+        Parameter overrides every run uses (the tuned entries are replaced by the tuning's values).
+    config : TuningConfig, optional
+        Settings of the smoothed training problem.
+    envs : tuple of int
+        Environments of the held-out evaluation.
+    """
+    train = _count("train", train, 0)
+    holdout = _count("holdout", holdout, 1)
+    base = resolve(params, prefix="params.")
+    out = Path(out)
     config = config or apf.TuningConfig()
     t_start = time.perf_counter()
 
     _say(f"[1/5] training set: 5 paper encounters + {train} sampled scenarios (environments 1-2, "
          f"seed {apf.TRAIN_SEED})")
-    scenarios = apf.training_scenarios(train)
+    scenarios = {k: with_params(v, _non_default(params)) for k, v in apf.training_scenarios(train).items()}
     _say("[2/5] smooth rollouts (exact loop at the paper's values sets each horizon)")
     t0 = time.perf_counter()
     cases = apf.prepare_cases(scenarios, config, _say)
@@ -61,10 +85,12 @@ def run(args, config: apf.TuningConfig | None = None, envs=(1, 2, 3, 4, 5)) -> d
     _say(f"[5/5] held-out evaluation: {holdout} scenarios per environment {envs[0]}-{envs[-1]} "
          f"(seed {apf.HOLDOUT_SEED}), exact closed loop")
     t0 = time.perf_counter()
-    heldout = apf.evaluate({"paper": paper, "tuned": tuned}, envs=envs, runs=holdout, report=_say)
+    heldout = apf.evaluate({"paper": {**_non_default(params), **paper}, "tuned": {**_non_default(params), **tuned}},
+                           envs=envs, runs=holdout, report=_say)
     t_eval = time.perf_counter() - t0
     report = {
         "command": "tune apf",
+        "params": base, "params_tuned_full": {**base, **tuned},
         "train": train, "holdout": holdout, "train_seed": apf.TRAIN_SEED, "holdout_seed": apf.HOLDOUT_SEED,
         "params_paper": paper, "params_tuned": tuned,
         "objective_before": result.objective_before, "objective_after": result.objective_after,

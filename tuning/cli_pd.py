@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from mmg_casadi.cli import write_json
+from mmg_casadi.io import write_json
 from mmg_casadi.errors import InputError, check_range
 
 from .linear import fit_nomoto_step
@@ -18,17 +18,13 @@ from .pd import (PdSpec, design_pd, paper_gains_map, plot_gain_map, plot_root_lo
                  verify_nonlinear)
 
 
-def _validate(args) -> tuple[float, float, float | None, Path]:
-    speed = check_range("--speed", getattr(args, "speed", 1.0), 0.2, 1.2, cls=InputError,
-                        unit="(fraction of the design speed)")
-    zeta = getattr(args, "zeta", None)
-    zeta = 0.8 if zeta is None else check_range("--zeta", zeta, 0.0, 2.0, low_open=True, cls=InputError)
-    wn = getattr(args, "wn", None)
+def _validate(out, speed, zeta, wn) -> tuple[float, float, float | None, Path]:
+    speed = check_range("speed", speed, 0.2, 1.2, cls=InputError, unit="(fraction of the design speed)")
+    zeta = 0.8 if zeta is None else check_range("zeta", zeta, 0.0, 2.0, low_open=True, cls=InputError)
     if wn is not None:
-        wn = check_range("--wn", wn, 0.0, None, low_open=True, cls=InputError, unit="(U_des/L)")
-    out = getattr(args, "out", None)
+        wn = check_range("wn", wn, 0.0, None, low_open=True, cls=InputError, unit="(U_des/L)")
     if out is None:
-        raise InputError("--out", "an output directory")
+        raise InputError("out", "an output directory")
     return speed, zeta, wn, Path(out)
 
 
@@ -43,13 +39,23 @@ def _finite(obj):
     return obj
 
 
-def run(args) -> dict:
+def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None = None) -> dict:
     """Design, verify and plot; return (and write to ``out/metrics.json``) the metrics.
 
-    ``args`` needs ``speed``, ``zeta`` (None → 0.8), ``wn`` (None → default rule of :mod:`tuning.pd`) and
-    ``out``. Non-finite numbers are written as null.
+    Parameters
+    ----------
+    out : str or Path
+        Output directory.
+    speed : float
+        Speed of the design (fraction of the design speed).
+    zeta : float, optional
+        Damping ratio (default 0.8).
+    wn : float, optional
+        Natural frequency (U/L; default: the rule of :mod:`tuning.pd`).
+
+    Non-finite numbers are written as null.
     """
-    speed, zeta, wn, out = _validate(args)
+    speed, zeta, wn, out = _validate(out, speed, zeta, wn)
     design = design_pd(speed, PdSpec(zeta=zeta, wn=wn))
     gmap = paper_gains_map(speed)
     paper = gmap.paper

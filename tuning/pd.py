@@ -681,8 +681,8 @@ class NonlinearCheck:
 
 def waypoint_square(kp: float, kd: float) -> dict:
     """CE, MCTE, status and time to goal of the paper's waypoint-square study with PD gains ``kp``, ``kd``."""
+    from mmg_casadi.encounters import waypoint_square as square_scenario
     from mmg_casadi.scenario_run import run_scenario
-    from studies.waypoint_square import square_scenario
     own = run_scenario(square_scenario(), params={"kp": float(kp), "kd": float(kd)}).metrics["ships"][0]
     return {"ce": own["ce"], "mcte": own["mcte"], "status": own["status"], "time_to_goal": own["time_to_goal"]}
 

@@ -23,8 +23,6 @@ from mmg_casadi.errors import InputError
 from mmg_casadi.fields import (InverseSquareParams, ModifiedVortexParams, SinkVortexParams, inverse_square,
                                modified_vortex, sink_vortex)
 
-FIELDS = ("inverse-square", "sink-vortex", "modified-vortex")
-
 _DEFAULTS = {
     "inverse-square": {"k_att": InverseSquareParams.k_att, "k_rep": InverseSquareParams.k_rep,
                        "d0": InverseSquareParams.d0},
@@ -34,6 +32,9 @@ _DEFAULTS = {
                         "gamma_max": ModifiedVortexParams.gamma_max, "heading": 0.0, "speed": 1.0,
                         "smooth": None},
 }
+"""Field parameters by field: the defaults of the parameter dataclasses (themselves the table's), plus the
+ship's heading, speed and the smoothing for the modified vortex's plane."""
+FIELDS = tuple(_DEFAULTS)
 
 
 def field_params(field: str, **params) -> dict:

@@ -1,0 +1,169 @@
+"""The method registry: each collision-avoidance method's name, guidance builder and parameter groups.
+
+The closed-loop step (:mod:`mmg_casadi.closed_loop`), the scenario loader, the studies, the Monte Carlo study,
+the benchmarks and the CLI all read :data:`METHODS`; adding a method is one entry here plus its builder.
+
+A builder takes a :class:`GuidanceInputs` (CasADi expressions of one ship and its neighbours inside the
+closed-loop step) and returns the 2×1 desired-heading vector of the method; the closed loop adds the channel
+walls' field and steers along the sum while any neighbour is within R_safe (or a wall within its range).
+
+Examples
+--------
+>>> NAMES
+('inverse-square', 'sink-vortex', 'modified-vortex', 'velocity-obstacle', 'none')
+>>> METHODS["modified-vortex"].groups
+('sink-vortex', 'modified-vortex')
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import casadi as ca
+
+from . import fields, velocity_obstacle
+from .errors import InputError
+
+
+@dataclass(frozen=True)
+class GuidanceInputs:
+    """What a method's builder sees of one ship inside the closed-loop step (CasADi expressions).
+
+    Parameters
+    ----------
+    pos, vel : SX (2×1)
+        Own position (L) and global velocity (U).
+    psi, speed : SX
+        Own heading (rad) and speed over ground (U).
+    goal : SX (2×1)
+        The waypoint being tracked (L).
+    nb_pos, nb_vel : SX (2×M)
+        Neighbours' positions and global velocities (other ships, then static obstacles with zero velocity).
+    nb_radius, active : SX (1×M)
+        Neighbours' radii (L) and the 0/1 (or smooth) mask of neighbours present within R_safe.
+    P : dict
+        The step's named numeric parameters (:data:`~mmg_casadi.closed_loop.GLOBAL_PARAMS`, angles in rad).
+    layout : Layout
+        The closed loop's shape (structural parameters such as the velocity obstacle's candidates and cone).
+    """
+
+    pos: object
+    vel: object
+    psi: object
+    speed: object
+    goal: object
+    nb_pos: object
+    nb_vel: object
+    nb_radius: object
+    active: object
+    P: dict
+    layout: object
+
+
+@dataclass(frozen=True)
+class Method:
+    """One registered method.
+
+    Parameters
+    ----------
+    name : str
+        Name in scenario files, ``--method`` and the Python API.
+    builder : callable or None
+        ``GuidanceInputs -> 2×1 desired-heading vector``; ``None`` for pure ILOS waypoint tracking.
+    groups : tuple of str
+        Parameter groups (:data:`mmg_casadi.params.GROUPS`) the builder reads.
+    source : str
+        Where the method comes from.
+    """
+
+    name: str
+    builder: Callable | None
+    groups: tuple[str, ...]
+    source: str
+
+
+def _inverse_square(g: GuidanceInputs):
+    P = g.P
+    return fields.inverse_square(g.pos, g.goal, g.nb_pos, g.nb_radius, g.active, k_att=P["k_att"],
+                                 k_rep=P["k_rep"], d0=P["d0"])
+
+
+def _sink_vortex(g: GuidanceInputs):
+    P = g.P
+    return fields.sink_vortex(g.pos, g.goal, g.nb_pos, g.active, lam_sink=P["lam_sink"], k_vor=P["k_vor"])
+
+
+def _modified_vortex(g: GuidanceInputs):
+    P = g.P
+    return fields.modified_vortex(g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active,
+                                  lam_sink=P["lam_sink"], k_vor0=P["k_vor0"], r_safe=P["r_safe"],
+                                  r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"], smooth=g.layout.smooth)
+
+
+def _velocity_obstacle(g: GuidanceInputs):
+    psi_vo = velocity_obstacle.velocity_obstacle(
+        g.pos, g.speed, g.goal, g.nb_pos, g.nb_vel, g.active, collision_distance=g.P["collision_distance"],
+        n_candidates=g.layout.vo_candidates, cone=g.layout.vo_cone)
+    return ca.vertcat(ca.cos(psi_vo), ca.sin(psi_vo))
+
+
+METHODS: dict[str, Method] = {m.name: m for m in (
+    Method("inverse-square", _inverse_square, ("inverse-square",), "paper §4.1, eqs. (attractive)–(repulsive)"),
+    Method("sink-vortex", _sink_vortex, ("sink-vortex",), "paper §4.2, eqs. (sink)–(vortex)"),
+    Method("modified-vortex", _modified_vortex, ("sink-vortex", "modified-vortex"),
+           "paper §4.3, eqs. (modified_vortex)–(factor_f)"),
+    Method("velocity-obstacle", _velocity_obstacle, ("velocity-obstacle",),
+           "Huang et al. 2018 (Ocean Eng. 151), the paper's baseline"),
+    Method("none", None, (), "ILOS waypoint tracking only (a ship that holds its course)"),
+)}
+"""Every method, by name."""
+
+NAMES: tuple[str, ...] = tuple(METHODS)
+"""Method names in registry order."""
+
+AVOIDING: tuple[str, ...] = tuple(n for n, m in METHODS.items() if m.builder is not None)
+"""Methods that avoid collisions (all but ``"none"``)."""
+
+PAPER_STATISTICS: tuple[str, ...] = ("modified-vortex", "inverse-square", "velocity-obstacle")
+"""Methods compared by the paper's statistical analysis."""
+
+
+def get(name, field: str = "method") -> Method:
+    """The registered method ``name``, or an :class:`~mmg_casadi.errors.InputError` naming ``field``.
+
+    Examples
+    --------
+    >>> get("none").builder is None
+    True
+    >>> get("vortex")
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, none, got 'vortex'
+    """
+    if not isinstance(name, str) or name not in METHODS:
+        raise InputError(field, f"one of: {', '.join(NAMES)}", name)
+    return METHODS[name]
+
+
+def parse_list(value, field: str = "methods") -> tuple[str, ...]:
+    """Method names from a comma-separated string or an iterable, checked and deduplicated.
+
+    Examples
+    --------
+    >>> parse_list("none, inverse-square,none")
+    ('none', 'inverse-square')
+    """
+    allowed = f"a non-empty list of: {', '.join(NAMES)}"
+    if isinstance(value, str):
+        value = [m.strip() for m in value.split(",") if m.strip()]
+    try:
+        items = list(value)
+    except TypeError:
+        raise InputError(field, allowed, value) from None
+    if not items:
+        raise InputError(field, allowed, value)
+    for m in items:
+        if not isinstance(m, str) or m not in METHODS:
+            raise InputError(field, allowed, m)
+    return tuple(dict.fromkeys(items))

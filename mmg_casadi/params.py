@@ -1,0 +1,361 @@
+"""The parameter table: one declaration per parameter of the closed loop (default, range, unit, meaning, source).
+
+Everything else is derived from :data:`PARAMETERS`: the defaults and range checks of the parameter dataclasses
+(:class:`~mmg_casadi.guidance.IlosParams`, :class:`~mmg_casadi.control.PdHeadingParams`, the field parameter
+classes of :mod:`mmg_casadi.fields`), the keys a scenario file's ``[settings]`` table and a ``--params`` file
+accept, the CLI help, the README table (:func:`markdown_table`) and the resolved parameter set every run writes
+into its outputs (:func:`resolve`).
+
+Units: lengths in ship lengths L, times in L/U (U the design speed), angles in degrees (as in scenario files; the
+closed loop converts them to rad).
+
+Examples
+--------
+>>> PARAMETERS["r_safe"].default, PARAMETERS["r_safe"].unit
+(15.0, 'L')
+>>> resolve({"kp": 2.0})["kp"], resolve()["kd"]
+(2.0, 4.0)
+>>> resolve({"kd": -1.0})
+Traceback (most recent call last):
+...
+mmg_casadi.errors.ParameterError: kd: expected a number in [0, inf) L/U, got -1.0
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+from .errors import InputError, ParameterError, check_range
+
+GROUPS = ("simulation", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "walls",
+          "velocity-obstacle", "outcome")
+"""Parameter groups, in the order of the README table; a method's guidance uses its own group(s)."""
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter.
+
+    Parameters
+    ----------
+    name : str
+        Key in scenario files, ``--params`` files and the Python API.
+    default : float, int or str
+        The value used when nothing overrides it.
+    low, high : float or None
+        Bounds of the allowed interval (``None``: unbounded).
+    unit : str
+        Unit of the value (``""`` for dimensionless).
+    meaning : str
+        One line saying what it is.
+    source : str
+        Where the default comes from: a paper equation or table, or "our choice, because ...".
+    group : str
+        One of :data:`GROUPS`.
+    low_open, high_open : bool
+        Whether the bounds are excluded.
+    kind : {"float", "int", "choice"}
+        Numbers are floats unless ``"int"``; ``"choice"`` takes one of ``choices``.
+    choices : tuple of str
+        Allowed values of a ``"choice"``.
+    structural : bool
+        Changes the shape of the compiled closed loop (a :class:`~mmg_casadi.closed_loop.Layout` field) rather
+        than a numeric input of it.
+    """
+
+    name: str
+    default: object
+    low: float | None
+    high: float | None
+    unit: str
+    meaning: str
+    source: str
+    group: str
+    low_open: bool = False
+    high_open: bool = False
+    kind: str = "float"
+    choices: tuple = ()
+    structural: bool = False
+
+    def allowed(self) -> str:
+        """Human-readable allowed values, as error messages print them.
+
+        Examples
+        --------
+        >>> PARAMETERS["vo_cone"].allowed()
+        'one of: huang, wide'
+        >>> PARAMETERS["dt"].allowed()
+        'a number in (0, 2] L/U'
+        """
+        if self.kind == "choice":
+            return f"one of: {', '.join(self.choices)}"
+        if self.kind == "int":
+            return f"an integer >= {self.low:g}"
+        try:
+            check_range(self.name, math.nan, self.low, self.high, low_open=self.low_open,
+                        high_open=self.high_open, unit=self.unit)
+        except ParameterError as err:
+            return err.allowed
+        raise AssertionError("check_range accepted nan")
+
+    def check(self, value, field: str | None = None, cls=ParameterError):
+        """``value`` converted to this parameter's type if allowed, else ``cls`` naming ``field`` (default: name).
+
+        Examples
+        --------
+        >>> PARAMETERS["vo_candidates"].check(40)
+        40
+        >>> PARAMETERS["ilos_delta"].check(0, field="settings.ilos_delta")
+        Traceback (most recent call last):
+        ...
+        mmg_casadi.errors.ParameterError: settings.ilos_delta: expected a number in (0, inf) L, got 0
+        """
+        field = field or self.name
+        if self.kind == "choice":
+            if not isinstance(value, str) or value not in self.choices:
+                raise cls(field, self.allowed(), value)
+            return value
+        if self.kind == "int":
+            if isinstance(value, bool) or not isinstance(value, int) or value < self.low:
+                raise cls(field, self.allowed(), value)
+            return int(value)
+        if not _is_real(value) or not math.isfinite(value):
+            raise cls(field, self.allowed(), value)
+        return check_range(field, value, self.low, self.high, low_open=self.low_open, high_open=self.high_open,
+                           cls=cls, unit=self.unit)
+
+
+_P = Param
+_REAL = dict(low=None, high=None)
+PARAMETERS: dict[str, Param] = {p.name: p for p in (
+    # simulation
+    _P("dt", 0.25, 0.0, 2.0, "L/U", "guidance step; the rudder command is held over it (RK4, one step)",
+       "our choice: the paper gives no guidance rate; 0.25 L/U ≈ 4.7 s", "simulation", low_open=True),
+    _P("t_max", 300.0, 0.0, 10000.0, "L/U", "horizon of a run", "our choice: every paper scenario ends well before",
+       "simulation", low_open=True),
+    _P("r_safe", 15.0, 0.0, None, "L", "safe radius R_safe: inside it the reactive method replaces ILOS",
+       "paper Table 3 (R_safe = 15 L)", "simulation", low_open=True),
+    _P("collision_distance", 2.0, 0.0, None, "L", "ship centres (or a ship and an obstacle centre) closer than "
+       "this collide", "paper §Statistical Analysis (collision within 2 L)", "simulation", low_open=True),
+    _P("goal_tolerance", 3.0, 0.0, None, "L", "waypoint acceptance radius R_tol; the goal is reached within it",
+       "paper Table 2 (R_tol = 3 L)", "simulation", low_open=True),
+    _P("ship_radius", 0.5, 0.0, None, "L", "radius of another ship as an inverse-square obstacle",
+       "our choice: half a ship length, like the paper's static obstacles", "simulation", low_open=True),
+    # ILOS
+    _P("ilos_delta", 2.0, 0.0, None, "L", "ILOS look-ahead distance Δ (K_p^g = 1/Δ)", "paper Table 2", "ilos",
+       low_open=True),
+    _P("ilos_k", 0.05, 0.0, None, "", "ILOS integral ratio k (K_i^g = k K_p^g)", "paper Table 2", "ilos"),
+    # PD heading control
+    _P("kp", 3.5, 0.0, None, "", "PD heading gain K_p^c (rad of rudder per rad of heading error)",
+       "paper Table 2", "pd", low_open=True),
+    _P("kd", 4.0, 0.0, None, "L/U", "PD derivative gain K_d^c on the measured yaw rate", "paper Table 2", "pd"),
+    _P("delta_max_deg", 35.0, 0.0, 45.0, "deg", "rudder command saturation",
+       "paper §3 (KCS rudder limit 35°)", "pd", low_open=True),
+    # inverse-square APF
+    _P("k_att", 50.0, 0.0, None, "1/(L/U)", "attractive gain of the inverse-square field",
+       "paper Table 3", "inverse-square"),
+    _P("k_rep", 200000.0, 0.0, None, "L³/(L/U)", "repulsive gain of the inverse-square field",
+       "paper Table 3", "inverse-square"),
+    _P("d0", 8.0, 0.0, None, "L", "influence distance of an obstacle, from its rim", "our choice: puts the "
+       "stagnation point of the paper's field example 5.4 L from the obstacle (paper: about 5 L)",
+       "inverse-square", low_open=True),
+    # sink-vortex APF
+    _P("k_vor", -10.0, **_REAL, unit="L²/(L/U)", meaning="vortex strength K at every active neighbour "
+       "(< 0 turns a head-on ship to starboard)", source="paper Table 3", group="sink-vortex"),
+    _P("lam_sink", -100.0, None, 0.0, "L²/(L/U)", "sink strength Λ at the goal (< 0 attracts)",
+       "paper Table 3", "sink-vortex", high_open=True),
+    # modified sink-vortex APF
+    _P("k_vor0", -10.0, **_REAL, unit="L²/(L/U)", meaning="nominal vortex strength K⁰_vor of the modified "
+       "vortex, eq. (modified_vortex)", source="paper Table 3", group="modified-vortex"),
+    _P("r_tol_vortex", 2.0, 0.0, None, "L", "R_tol of the tangential-velocity threshold −2 R_tol v_r / d",
+       "laboratory code (the collision distance; the paper writes R_tol)", "modified-vortex"),
+    _P("gamma_max_deg", 112.5, 0.0, 180.0, "deg", "largest |relative bearing γ| at which the vortex acts",
+       "COLREG Rule 13: the 112.5° that leaves the stern sector (22.5° abaft the beam) without vortex",
+       "modified-vortex", low_open=True),
+    # channel walls
+    _P("wall_lam", 10.0, 0.0, None, "L²/(L/U)", "line-source strength of a channel wall",
+       "paper §Narrow Waterways (Λ = 10)", "walls"),
+    _P("wall_d_act", 2.0, 0.0, None, "L", "perpendicular distance below which a wall acts",
+       "paper §Narrow Waterways", "walls", low_open=True),
+    # velocity obstacle
+    _P("vo_candidates", 80, 1, None, "", "candidate headings of the velocity obstacle (at the current speed)",
+       "our choice: 4.5° resolution", "velocity-obstacle", kind="int", structural=True),
+    _P("vo_cone", "wide", None, None, "", "cone half-angle: 'huang' asin(D/d) (Huang et al. 2018) or 'wide' "
+       "2·atan(D/d)", "laboratory's later version ('wide')", "velocity-obstacle", kind="choice",
+       choices=("huang", "wide"), structural=True),
+    # outcome
+    _P("stall_window", 50.0, 0.0, None, "L/U", "a run that made no progress towards its goal for this long "
+       "before t_max is 'stalled'", "our choice", "outcome", low_open=True),
+)}
+"""Every parameter, by name."""
+
+NUMERIC = tuple(n for n, p in PARAMETERS.items() if not p.structural)
+"""Parameters that are numeric inputs of the compiled closed loop (or of the outcome judgement)."""
+STRUCTURAL = tuple(n for n, p in PARAMETERS.items() if p.structural)
+"""Parameters that select the compiled closed loop's shape."""
+
+
+def check_value(name: str, value, *, field: str | None = None, cls=ParameterError):
+    """``value`` checked against parameter ``name`` (unknown names raise ``cls`` listing the known ones).
+
+    Examples
+    --------
+    >>> check_value("ilos_k", 0.1)
+    0.1
+    >>> check_value("r_saf", 1.0, field="params.r_saf")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.ParameterError: params.r_saf: expected a parameter name (one of: dt, t_max, ...
+    """
+    if name not in PARAMETERS:
+        raise cls(field or name, f"a parameter name (one of: {', '.join(PARAMETERS)})")
+    return PARAMETERS[name].check(value, field=field, cls=cls)
+
+
+def resolve(*layers: dict | None, cls=ParameterError, prefix: str = "") -> dict:
+    """The full parameter set: table defaults updated with each mapping of ``layers`` in turn, all checked.
+
+    Parameters
+    ----------
+    *layers : dict or None
+        Overrides by parameter name, later ones winning (e.g. scenario settings, then a ``--params`` file).
+    cls : type
+        Error raised for an unknown name or a bad value (an :class:`~mmg_casadi.errors.InputError` subclass).
+    prefix : str
+        Prepended to the parameter name in error messages (e.g. ``"params."``).
+
+    Returns
+    -------
+    dict
+        Every parameter of :data:`PARAMETERS`, in table order.
+
+    Examples
+    --------
+    >>> resolve({"dt": 0.5}, {"dt": 0.1})["dt"]
+    0.1
+    """
+    out = {n: p.default for n, p in PARAMETERS.items()}
+    for layer in layers:
+        for k, v in (layer or {}).items():
+            out[k] = check_value(k, v, field=f"{prefix}{k}", cls=cls)
+    return out
+
+
+def diff(a: dict, b: dict) -> str | None:
+    """First key (table order) whose value differs between two resolved sets, or None.
+
+    Examples
+    --------
+    >>> diff(resolve(), resolve({"kd": 3.0}))
+    'kd'
+    """
+    for k in PARAMETERS:
+        if a.get(k) != b.get(k):
+            return k
+    return None
+
+
+def group(name: str) -> tuple[str, ...]:
+    """Names of the parameters of one group.
+
+    Examples
+    --------
+    >>> group("ilos")
+    ('ilos_delta', 'ilos_k')
+    """
+    if name not in GROUPS:
+        raise InputError("group", f"one of: {', '.join(GROUPS)}", name)
+    return tuple(n for n, p in PARAMETERS.items() if p.group == name)
+
+
+def field(name: str, attr_unit_scale: float = 1.0):
+    """A dataclass field whose default is parameter ``name``'s, scaled by ``attr_unit_scale``.
+
+    Used by the parameter dataclasses so their defaults are the table's; :func:`check_fields` checks them.
+    """
+    return dataclasses.field(default=PARAMETERS[name].default * attr_unit_scale,
+                             metadata={"param": name, "scale": attr_unit_scale})
+
+
+def check_fields(obj) -> None:
+    """Check every field of a parameter dataclass made with :func:`field` against the table.
+
+    The error names the table's parameter (e.g. ``ilos_delta``), the name used everywhere else.
+    """
+    for f in dataclasses.fields(obj):
+        if "param" in f.metadata:
+            value = getattr(obj, f.name)
+            scale = f.metadata["scale"]
+            check_value(f.metadata["param"], value / scale if scale != 1.0 and _is_real(value) else value)
+
+
+def _is_real(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def markdown_table() -> str:
+    """The table as Markdown (name, default, allowed, unit, meaning, source), grouped as in :data:`GROUPS`.
+
+    Examples
+    --------
+    >>> markdown_table().splitlines()[0]
+    '| parameter | default | allowed | meaning | source |'
+    """
+    rows = ["| parameter | default | allowed | meaning | source |", "|---|---|---|---|---|"]
+    for g in GROUPS:
+        for n in group(g):
+            p = PARAMETERS[n]
+            allowed = p.allowed().removeprefix("a number in ").removeprefix("one of: ")
+            rows.append(f"| `{n}` | {p.default} | {allowed} | {p.meaning} | {p.source} |")
+    return "\n".join(rows)
+
+
+def help_text() -> str:
+    """One line per parameter for the CLI's ``--params`` help.
+
+    Examples
+    --------
+    >>> help_text().splitlines()[0].split()[0]
+    'dt'
+    """
+    return "\n".join(f"{n} = {p.default} ({p.allowed()}): {p.meaning}" for n, p in PARAMETERS.items())
+
+
+def load_file(path) -> dict:
+    """Parameter values from a TOML file (top level, or a ``[params]`` table as ``tune apf`` writes), checked.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    dict
+        Parameter name → value, only the keys the file gives.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> f = pathlib.Path(tempfile.mkdtemp()) / "p.toml"
+    >>> _ = f.write_text("[params]\\nr_safe = 12.0\\n")
+    >>> load_file(f)
+    {'r_safe': 12.0}
+    """
+    import tomllib
+    from pathlib import Path
+    path = Path(path)
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as err:
+        raise ParameterError("params file", "an existing, readable UTF-8 TOML file", f"{path} ({err})") from None
+    except tomllib.TOMLDecodeError as err:
+        raise ParameterError("params file", f"valid TOML ({err})", str(path)) from None
+    if "params" in raw:
+        if set(raw) != {"params"} or not isinstance(raw["params"], dict):
+            raise ParameterError("params file", "either parameters at the top level or one [params] table",
+                                 str(path))
+        raw = raw["params"]
+    return {k: check_value(k, v, field=f"params.{k}") for k, v in raw.items()}
