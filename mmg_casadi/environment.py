@@ -22,6 +22,13 @@ and rudder forces already depend on ``nu_r`` only, so the calm-water equations f
 with ``u, v`` read as velocities through the water; only the position kinematics change. Ground velocities, for
 guidance and metrics, are :func:`ground_velocity`.
 
+**Crab angle.** Over the ground the ship moves along its course ``chi = psi + beta_c`` with the crab angle
+``beta_c = atan2(v_g, u_g)`` (:func:`crab_angle`); a course-keeping guidance law (LOS gives a desired course)
+steers the heading ``psi_d = chi_d - beta_c`` (Fossen, Pettersen & Galeazzi 2015; Fossen 2021, ch. 12).
+
+**Gusts** (optional, off unless asked for): :func:`gust_speeds` draws a seeded first-order Gauss-Markov
+(Ornstein-Uhlenbeck) wind-speed sequence around the mean, to be fed step by step as ``U_w``.
+
 **Wind.** The force on the above-water body follows Blendermann's parametric model (Blendermann 1994,
 J. Wind Eng. Ind. Aerodyn. 51:339-351), in the form of Fossen (2021), §10.1.2, with the relative wind angle
 ``gamma = -atan2(v_rw, u_rw)`` (0 = wind on the bow, +pi/2 = wind from port) and relative wind speed ``V_rw``:
@@ -35,10 +42,12 @@ the published formula (given for 0 <= gamma <= pi) odd in gamma, as the port/sta
 The apparent wind is the true wind relative to the ship's GROUND velocity (Fossen 2021, §10.1):
 ``u_rw = u_g - u_w``, ``v_rw = v_g - v_w`` with ``(u_w, v_w)`` the wind velocity in body axes.
 
-The MMG coefficients describe the ship sailing in still air (the self-propulsion point u' = 1 at 115.5 rpm
-includes whatever air resistance the source's model has), so the wind enters as the INCREMENT over the still-air
-load, ``F(apparent wind) - F(still air, apparent = -ground velocity)``, the way ITTC 7.5-04-01-01.1 (speed/power
-trials) and ISO 15016 correct for wind. With ``env = 0`` the disturbance is therefore exactly zero.
+The calm-water model has no air-load term (nor has the source's model with its wind switched off), and its
+self-propulsion point u' = 1 at 115.5 rpm is calibrated without one. To keep that model exactly, the wind enters
+as the INCREMENT over the still-air load, ``F(apparent wind) - F(still air, apparent = -ground velocity)``, the
+way ITTC 7.5-04-01-01.1 (speed/power trials) and ISO 15016 correct trial data for wind. With ``env = 0`` the
+disturbance is therefore exactly zero; the ship's own still-air drag (1.3 % of the hull resistance at U_des for
+the default windage) stays unmodelled, as in calm water.
 
 Forces are non-dimensionalised like the others: ``X' = X/(rho U_des^2 L d/2)``, ``N' = N/(rho U_des^2 L^2 d/2)``,
 so ``X' = (rho_a/rho) (A_F/(L d)) C_X V_rw'^2`` with ``V_rw' = V_rw/U_des``.
@@ -49,8 +58,10 @@ Blendermann, W. (1994). Parameter identification of wind loads on ships. J. Wind
 Fossen, T. I. (2021). Handbook of Marine Craft Hydrodynamics and Motion Control, 2nd ed., Wiley, ch. 10
 (1st ed. 2011, ch. 8). The Blendermann parameters of :data:`CONTAINER_SHIP_LOADED` are the "container ship,
 loaded" row of the table reproduced there, read from the author's MSS toolbox (``blendermann94.m``).
+Fossen, T. I., Pettersen, K. Y. & Galeazzi, R. (2015). Line-of-sight path following for Dubins paths with
+adaptive sideslip compensation of drift forces. IEEE Trans. Control Syst. Technol. 23(2), 820-827.
 Fossen, T. I. (2012). How to incorporate wind, waves and ocean currents in the marine craft equations of motion.
-IFAC MCMC 2012, Arenzano.
+Proc. IFAC MCMC 2012, Genova.
 ITTC (2017). Recommended Procedure 7.5-04-01-01.1, Preparation, conduct and analysis of speed/power trials.
 """
 
@@ -295,3 +306,53 @@ def wind_forces(ship, windage: Windage, u_g, v_g, psi, U_w, psi_w):
     X, Y, N = _wind_load_nd(ship, windage, u_rw, v_rw)
     X0, Y0, N0 = _wind_load_nd(ship, windage, u_g, v_g)  # still air
     return X - X0, Y - Y0, N - N0
+
+
+def crab_angle(u_g, v_g):
+    """Crab angle β_c = atan2(v_g, u_g) between heading and course over the ground (rad, positive when the ship
+    is set to starboard); the course is ψ + β_c.
+
+    Examples
+    --------
+    >>> round(math.degrees(float(crab_angle(1.0, 0.1))), 4)   # set to starboard by 0.1 U
+    5.7106
+    """
+    return ca.atan2(v_g, u_g)
+
+
+def gust_speeds(n_steps: int, dt: float, mean_speed: float, *, intensity: float = 0.1,
+                time_constant: float = 5.0, seed: int = 0) -> np.ndarray:
+    """Seeded gusty wind-speed sequence ``U_w[k]`` (U_des units) at steps of ``dt`` (L/U_des), for ``env[2]``.
+
+    A first-order Gauss-Markov (Ornstein-Uhlenbeck) process around ``mean_speed`` with standard deviation
+    ``intensity * mean_speed`` (turbulence intensity, [0, 0.5]) and correlation time ``time_constant``
+    (L/U_des; 5 is about 93 s for the KCS), so its spectrum is ``S(ω) = 2σ²T/(1 + ω²T²)``. It is sampled
+    exactly: ``U[k+1] = m + a (U[k] - m) + σ sqrt(1 - a²) w[k]``, ``a = exp(-dt/T)``, ``w[k]`` standard normal,
+    ``U[0]`` drawn from the stationary distribution; speeds are clipped at 0. A simple filtered noise in the
+    sense of the issue; the spectral wind-gust models (Harris, NORSOK) of Fossen (2021) §10.1 are not used.
+
+    Examples
+    --------
+    >>> g = gust_speeds(1000, 0.1, 1.2, seed=3)
+    >>> g.shape, bool(np.all(g == gust_speeds(1000, 0.1, 1.2, seed=3)))
+    ((1000,), True)
+    >>> bool(np.all(gust_speeds(5, 0.1, 1.2, intensity=0.0) == 1.2))
+    True
+    """
+    if not isinstance(n_steps, (int, np.integer)) or isinstance(n_steps, bool) or n_steps < 1:
+        from .errors import ParameterError
+        raise ParameterError("n_steps", "an integer >= 1", n_steps)
+    check_range("dt", dt, 0.0, None, low_open=True, unit="L/U_design")
+    check_range("mean_speed", mean_speed, 0.0, 5.0, unit="x U_design")
+    check_range("intensity", intensity, 0.0, 0.5)
+    check_range("time_constant", time_constant, 0.0, None, low_open=True, unit="L/U_design")
+    rng = np.random.default_rng(seed)
+    sigma = intensity * mean_speed
+    a = math.exp(-dt / time_constant)
+    w = rng.standard_normal(n_steps)
+    dev = np.empty(n_steps)
+    dev[0] = sigma * w[0]
+    b = sigma * math.sqrt(1.0 - a * a)
+    for k in range(1, n_steps):
+        dev[k] = a * dev[k - 1] + b * w[k]
+    return np.maximum(mean_speed + dev, 0.0)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mmg_casadi.environment import (CONTAINER_SHIP_LOADED, NENV, Environment, Windage, blendermann_coefficients,
-                                    ground_velocity, wind_forces)
+                                    crab_angle, ground_velocity, gust_speeds, wind_forces)
 from mmg_casadi.errors import ParameterError
 from mmg_casadi.model import (NX, build_cvodes, build_mmg, build_rk4_step, linearise, mass_matrix,
                               propeller_rpm_for_speed)
@@ -251,3 +251,36 @@ def test_environment_vector_and_si_conversion():
     env = Environment.from_si(current_speed=1.2347, current_direction=0.5, wind_speed=12.347, wind_direction=-1.0)
     assert env.vector() == pytest.approx([0.1, 0.5, 1.0, -1.0], rel=1e-12)
     assert Environment().calm and not env.calm
+
+
+# crab angle and gusts ----------------------------------------------------------------------------------------
+
+
+def test_crab_angle_is_course_minus_heading_in_a_beam_current():
+    fd = build_mmg(disturbed=True)
+    psi, env = 0.7, [0.1, 0.7 + math.pi / 2, 0.0, 0.0]  # current from port, across the heading
+    x = [1.0, 0.0, 0.0, 0.0, 0.0, psi, 0.0]
+    xd = _f(fd, x, 0.0, N_RPM, env)
+    course = math.atan2(xd[4], xd[3])
+    u_g, v_g = ground_velocity(1.0, 0.0, psi, env[0], env[1])
+    assert float(crab_angle(u_g, v_g)) == pytest.approx(course - psi, abs=1e-12)
+    assert float(crab_angle(u_g, v_g)) == pytest.approx(math.atan(0.1), abs=1e-12)
+
+
+def test_gusts_have_the_stated_mean_spread_and_correlation():
+    dt, T, m, I = 0.1, 5.0, 1.2, 0.1
+    g = gust_speeds(400_000, dt, m, intensity=I, time_constant=T, seed=11)
+    # 400 000 samples with correlation time 50 steps: about 4000 independent samples, standard error of the
+    # mean ~ 0.12/sqrt(4000) = 0.002; a 4-sigma band
+    assert g.mean() == pytest.approx(m, abs=0.008)
+    assert g.std() == pytest.approx(I * m, rel=0.05)
+    d = g - g.mean()
+    assert np.dot(d[:-50], d[50:]) / np.dot(d, d) == pytest.approx(math.exp(-50 * dt / T), abs=0.06)
+    assert not np.array_equal(g[:100], gust_speeds(100, dt, m, intensity=I, time_constant=T, seed=12))
+
+
+def test_gusts_reject_bad_input():
+    with pytest.raises(ParameterError, match="intensity"):
+        gust_speeds(10, 0.1, 1.0, intensity=0.9)
+    with pytest.raises(ParameterError, match="n_steps"):
+        gust_speeds(0, 0.1, 1.0)
