@@ -221,6 +221,19 @@ def ground_velocity(u_r, v_r, psi, V_c, beta_c):
     return u_r + u_c, v_r + v_c
 
 
+def velocity_over_ground(u_r, v_r, psi, V_c, beta_c):
+    """Earth-fixed velocity over the ground ``(x_dot, y_dot) = R(psi) (u_r, v_r) + V_c (cos beta_c, sin beta_c)``,
+    the velocity that obstacle-avoidance guidance (fields, velocity obstacle) must use.
+
+    Examples
+    --------
+    >>> [round(float(c), 12) for c in velocity_over_ground(1.0, 0.0, math.pi / 2, 0.1, math.pi / 2)]
+    [0.0, 1.1]
+    """
+    x_c, y_c = current_kinematics(V_c, beta_c)
+    return u_r * ca.cos(psi) - v_r * ca.sin(psi) + x_c, u_r * ca.sin(psi) + v_r * ca.cos(psi) + y_c
+
+
 def current_kinematics(V_c, beta_c):
     """Earth-fixed drift ``(x_dot, y_dot)`` added by the current to the position kinematics.
 
