@@ -4,6 +4,10 @@ State ``x = [u, v, r, x, y, psi, delta]`` (velocities over U_des, yaw rate in U_
 rad); inputs: commanded rudder ``delta_c`` (rad) and propeller speed ``n_rpm`` (rev/min). The force model is the
 laboratory's form spelled out in the header of ``data/kcs_mmg.toml`` (drift-angle hull polynomial, design-speed
 scaling, constant wake), not the Yasukawa–Yoshimura 2015 standard form.
+
+With a disturbance input ``env = [V_c, beta_c, U_w, psi_w]`` (:mod:`mmg_casadi.environment`) the state's
+``u, v`` are velocities RELATIVE TO THE WATER; the position kinematics add the current and the wind load is added
+to the forces. Without it (the default) the model is the calm-water model, expression for expression.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import casadi as ca
 import numpy as np
 
 from .actuator import steering_rate
+from .environment import NENV, Windage, current_kinematics, ground_velocity, wind_forces
 from .ship import ShipParams, SteeringParams, load_kcs, load_steering
 
 STATE_NAMES = ("u", "v", "r", "x", "y", "psi", "delta")
@@ -79,11 +84,14 @@ def rudder_forces(ship: ShipParams, u, v, r, delta, n_rpm):
     return XR, YR, NR, {"uR": uR, "vR": vR, "alphaR": alphaR, "J": J, "KT": KT}
 
 
-def mmg_rhs(ship: ShipParams, steering: SteeringParams, x, delta_c, n_rpm):
+def mmg_rhs(ship: ShipParams, steering: SteeringParams, x, delta_c, n_rpm, env=None,
+            windage: Windage | None = None):
     """Right-hand side ẋ of the MMG model with steering gear (CasADi expression, 7x1).
 
     Equations of motion # eq. (mmg_nd) with the forces of # eq. (tau), kinematics # eq. (kinematics) and the
-    steering gear # eq. (delta_dot_equation).
+    steering gear # eq. (delta_dot_equation). With ``env`` (4-vector ``[V_c, beta_c, U_w, psi_w]``) the wind
+    load of ``windage`` (default :class:`~mmg_casadi.environment.Windage`) is added to the forces and the
+    current to the kinematics; ``u, v`` are then velocities through the water.
     """
     u, v, r, psi, delta = x[0], x[1], x[2], x[5], x[6]
     XH, YH, NH = hull_forces(ship, u, v, r)
@@ -93,16 +101,26 @@ def mmg_rhs(ship: ShipParams, steering: SteeringParams, x, delta_c, n_rpm):
     X = XH + XP + XR + m * v * r + m * xg * r**2  # eq. (tau) + Coriolis terms of eq. (mmg_nd)
     Y = YH + YR - m * u * r
     N = NH + NR - m * xg * u * r
+    if env is not None:
+        u_g, v_g = ground_velocity(u, v, psi, env[0], env[1])
+        XW, YW, NW = wind_forces(ship, windage or Windage(), u_g, v_g, psi, env[2], env[3])
+        X, Y, N = X + XW, Y + YW, N + NW
     Minv = np.linalg.inv(mass_matrix(ship))
     acc = ca.mtimes(ca.DM(Minv), ca.vertcat(X, Y, N))
     xdot = u * ca.cos(psi) - v * ca.sin(psi)  # eq. (kinematics)
     ydot = u * ca.sin(psi) + v * ca.cos(psi)
+    if env is not None:
+        xdot_c, ydot_c = current_kinematics(env[0], env[1])
+        xdot, ydot = xdot + xdot_c, ydot + ydot_c
     ddot = steering_rate(delta, delta_c, steering.T_delta, steering.rate_max_nd(ship), steering.delta_max)
     return ca.vertcat(acc, xdot, ydot, r, ddot)
 
 
-def build_mmg(ship: ShipParams | None = None, steering: SteeringParams | None = None) -> ca.Function:
-    """Named CasADi Function ``mmg(x[7], delta_c, n_rpm) -> xdot[7]``.
+def build_mmg(ship: ShipParams | None = None, steering: SteeringParams | None = None, *, disturbed: bool = False,
+              windage: Windage | None = None) -> ca.Function:
+    """Named CasADi Function ``mmg(x[7], delta_c, n_rpm) -> xdot[7]``, or with ``disturbed=True``
+    ``mmg_env(x[7], delta_c, n_rpm, env[4]) -> xdot[7]`` with the disturbance ``env = [V_c, beta_c, U_w, psi_w]``
+    as an input (see :mod:`mmg_casadi.environment`; ``windage`` defaults to the KCS estimate there).
 
     Examples
     --------
@@ -110,14 +128,22 @@ def build_mmg(ship: ShipParams | None = None, steering: SteeringParams | None = 
     >>> xdot = f([1.0, 0, 0, 0, 0, 0, 0], 0.0, 115.5)
     >>> abs(float(xdot[0])) < 1e-3      # self-propulsion point: u' = 1 at 115.5 rpm
     True
+    >>> fd = build_mmg(disturbed=True)
+    >>> xdot = fd([1.0, 0, 0, 0, 0, 0, 0], 0.0, 115.5, [0.1, math.pi / 2, 0.0, 0.0])  # current to starboard
+    >>> round(float(xdot[4]), 12)       # y_dot = the current
+    0.1
     """
     ship = ship or load_kcs()
     steering = steering or load_steering()
     x = ca.SX.sym("x", NX)
     dc = ca.SX.sym("delta_c")
     n = ca.SX.sym("n_rpm")
-    return ca.Function("mmg", [x, dc, n], [mmg_rhs(ship, steering, x, dc, n)],
-                       ["x", "delta_c", "n_rpm"], ["xdot"])
+    if not disturbed:
+        return ca.Function("mmg", [x, dc, n], [mmg_rhs(ship, steering, x, dc, n)],
+                           ["x", "delta_c", "n_rpm"], ["xdot"])
+    env = ca.SX.sym("env", NENV)
+    return ca.Function("mmg_env", [x, dc, n, env], [mmg_rhs(ship, steering, x, dc, n, env, windage)],
+                       ["x", "delta_c", "n_rpm", "env"], ["xdot"])
 
 
 def rk4(f, x, args, h):
@@ -132,29 +158,47 @@ def rk4(f, x, args, h):
 def build_rk4_step(f: ca.Function | None = None, n_sub: int = 1) -> ca.Function:
     """Fixed-step RK4 Function ``rk4_step(x, delta_c, n_rpm, dt) -> x_next`` with ``n_sub`` sub-steps.
 
+    For a disturbed model (``build_mmg(disturbed=True)``) the Function is
+    ``rk4_step_env(x, delta_c, n_rpm, dt, env) -> x_next``, the disturbance held over the step.
+
     Examples
     --------
     >>> step = build_rk4_step()
     >>> xn = step([1.0, 0, 0, 0, 0, 0, 0], 0.0, 115.5, 0.25)
     >>> round(float(xn[3]), 3)      # 0.25 L travelled at u' = 1
     0.25
+    >>> step_env = build_rk4_step(build_mmg(disturbed=True))
+    >>> xn = step_env([1.0, 0, 0, 0, 0, 0, 0], 0.0, 115.5, 0.25, [0.1, 0.0, 0.0, 0.0])
+    >>> round(float(xn[3]), 3)      # plus 0.1 x 0.25 L of following current
+    0.275
     """
     f = f or build_mmg()
     x = ca.SX.sym("x", NX)
     dc, n, dt = ca.SX.sym("delta_c"), ca.SX.sym("n_rpm"), ca.SX.sym("dt")
+    disturbed = f.n_in() == 4
+    env = ca.SX.sym("env", NENV)
+    args = (dc, n, env) if disturbed else (dc, n)
     h = dt / n_sub
     xn = x
     for _ in range(n_sub):
-        xn = rk4(f, xn, (dc, n), h)
+        xn = rk4(f, xn, args, h)
+    if disturbed:
+        return ca.Function("rk4_step_env", [x, dc, n, dt, env], [xn], ["x", "delta_c", "n_rpm", "dt", "env"],
+                           ["x_next"])
     return ca.Function("rk4_step", [x, dc, n, dt], [xn], ["x", "delta_c", "n_rpm", "dt"], ["x_next"])
 
 
 def build_cvodes(f: ca.Function | None = None, t_grid=None, *, reltol=1e-10, abstol=1e-10) -> ca.Function:
-    """Adaptive CVODES integrator of the same model with constant inputs, outputs at ``t_grid``."""
+    """Adaptive CVODES integrator of the same model with constant inputs, outputs at ``t_grid``.
+
+    Parameters ``p = [delta_c, n_rpm]``, or ``[delta_c, n_rpm, V_c, beta_c, U_w, psi_w]`` for a disturbed model.
+    """
     f = f or build_mmg()
     x = ca.SX.sym("x", NX)
-    p = ca.SX.sym("p", 2)
-    dae = {"x": x, "p": p, "ode": f(x, p[0], p[1])}
+    disturbed = f.n_in() == 4
+    p = ca.SX.sym("p", 2 + NENV if disturbed else 2)
+    ode = f(x, p[0], p[1], p[2:]) if disturbed else f(x, p[0], p[1])
+    dae = {"x": x, "p": p, "ode": ode}
     return ca.integrator("cvodes_mmg", "cvodes", dae, 0.0, list(t_grid),
                          {"reltol": reltol, "abstol": abstol, "max_num_steps": 100000})
 
@@ -188,22 +232,35 @@ def propeller_rpm_for_speed(speed: float, ship: ShipParams | None = None) -> flo
     return float(_rpm_rootfinder(ship)(ship.n_design_rpm * speed, speed))
 
 
-def linearise(state, inputs, ship: ShipParams | None = None, steering: SteeringParams | None = None):
+def linearise(state, inputs, ship: ShipParams | None = None, steering: SteeringParams | None = None, *,
+              env=None, windage: Windage | None = None):
     """Exact Jacobians ``(A, B)`` of the model ``ẋ = f(x, u)`` at ``state`` (7) and ``inputs = [delta_c, n_rpm]``.
 
     The flow-straightening coefficient switches at β_P = 0; exactly on the switch (straight running) the
-    starboard-side value γ_R⁻ is the one differentiated.
+    starboard-side value γ_R⁻ is the one differentiated. With ``env = [V_c, beta_c, U_w, psi_w]`` (a sequence or
+    an :class:`~mmg_casadi.environment.Environment`) the disturbed model is linearised, ``u, v`` being
+    velocities through the water.
 
     Examples
     --------
     >>> A, B = linearise([1.0, 0, 0, 0, 0, 0, 0], [0.0, 115.5])
     >>> A.shape, B.shape
     ((7, 7), (7, 2))
+    >>> A, _ = linearise([1.0, 0, 0, 0, 0, 0, 0], [0.0, 115.5], env=[0.1, 0.0, 0.0, 0.0])
+    >>> round(float(A[4, 5]), 12)       # d(y_dot)/d(psi) = u through the water, the current adds none
+    1.0
     """
-    f = build_mmg(ship, steering)
     x = ca.SX.sym("x", NX)
     u = ca.SX.sym("u", 2)
-    xdot = f(x, u[0], u[1])
+    if env is None:
+        xdot = build_mmg(ship, steering)(x, u[0], u[1])
+        e = np.zeros(0)
+    else:
+        e = np.asarray(env.vector() if hasattr(env, "vector") else env, float).ravel()
+        if e.size != NENV:
+            from .errors import ParameterError
+            raise ParameterError("env", f"{NENV} numbers [V_c, beta_c, U_w, psi_w]", e.size)
+        xdot = build_mmg(ship, steering, disturbed=True, windage=windage)(x, u[0], u[1], ca.DM(e))
     jac = ca.Function("mmg_jacobians", [x, u], [ca.jacobian(xdot, x), ca.jacobian(xdot, u)])
     A, B = jac(np.asarray(state, float), np.asarray(inputs, float))
     return np.array(A), np.array(B)
