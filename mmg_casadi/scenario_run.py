@@ -8,10 +8,11 @@
                 "collided": bool, "collision_time": float|null, "collision_with": str|null,
                 "min_distance": float, "stalled_at": [x, y]|null, "reactive_time": float}],
      "pairs": [{"a", "b", "min_distance", "t_min", "encounter", "compliant",
-                "encounter_b", "compliant_b", "t_enter"}]}
+                "encounter_b", "compliant_b", "t_enter", "rules"}]}
 
 ``encounter``/``compliant`` are from ship ``a``'s side (``encounter_b``/``compliant_b`` from ``b``'s);
-static obstacles appear as ``b = "obstacle<k>"`` with encounter ``"static"``.
+static obstacles appear as ``b = "obstacle<k>"`` with encounter ``"static"`` (no ``rules``). ``rules`` is the
+rule-by-rule COLREG scoring of a ship pair under the chosen profile (:func:`mmg_casadi.colregs_score.score_pair`).
 """
 
 from __future__ import annotations
@@ -160,7 +161,7 @@ def _ship_status(final, t_end, t_max, stall_window):
 
 def assess(sc, traj: Trajectory, g: dict, *, stall_window: float = STALL_WINDOW, profile=None) -> ScenarioResult:
     """Metrics of a trajectory: per-ship outcome, CE, MCTE, collisions; per-pair closest approach and COLREGs."""
-    profile = profile or colregs.ColregProfile()
+    profile = colregs.get_profile(profile)
     names = [s.name for s in sc.ships]
     N = len(names)
     S = len(sc.obstacles)
@@ -202,7 +203,7 @@ def assess(sc, traj: Trajectory, g: dict, *, stall_window: float = STALL_WINDOW,
             pairs.append({"a": names[i], "b": names[j], "min_distance": float(a.min_distance),
                           "t_min": float(a.t_min), "encounter": a.encounter, "compliant": a.compliant,
                           "encounter_b": a.encounter_b, "compliant_b": a.compliant_b,
-                          "t_enter": None if a.t_enter is None else float(a.t_enter)})
+                          "t_enter": None if a.t_enter is None else float(a.t_enter), "rules": a.rules})
             for k, enc, ok in ((i, a.encounter, a.compliant), (j, a.encounter_b, a.compliant_b)):
                 if enc not in (None, "none"):
                     tag = f"{enc} {'✓' if ok else '✗' if ok is not None else ''}".strip()
