@@ -28,7 +28,8 @@ import numpy as np
 from .colregs import LAB_PROFILE, ColregProfile, _bearing, _series, classify_encounter, wrap_to_pi
 from .errors import check_range
 
-RULES = ("8", "13", "14", "15", "16", "17a", "17b", "17c")  #: rule keys of a side's ``rules`` (17a = 17(a)(i))
+#: rule keys of a side's verdicts: 17a = 17(a)(i), 17b = 17(a)(ii) with 17(b), 17c = 17(c)
+RULES = ("8", "13", "14", "15", "16", "17a", "17b", "17c")
 _APPLICABLE = {
     "crossing-give-way": ("8", "15", "16"),
     "head-on": ("8", "14"),
@@ -268,12 +269,13 @@ def _side(enc, t, pos, psi, spd, pos_o, psi_o, cpa_pred, tcpa_pred, dist, k_ente
             d["17a"] = {"until": t[window[held][-1]], "heading_change_deg": course, "speed_change": speed,
                         "course_tolerance_deg": profile.course_tolerance_deg,
                         "speed_tolerance": profile.speed_tolerance}
-        if k_must is not None or not kept_clear:
-            k0 = k_may if k_may is not None else k_enter
-            after = window >= k0
-            turn = deg(float(np.max(np.abs(wrap_to_pi(psi[window[after]] - psi[k0])))))
-            cut = max(0.0, -float(np.min(spd[window[after]] / spd[k0] - 1.0))) if spd[k0] > 0.0 else 0.0
-            v["17b"] = turn >= profile.starboard_min_deg or cut >= profile.speed_apparent
+        k0 = k_may if k_may is not None else k_enter
+        after = window >= k0
+        turn = deg(float(np.max(np.abs(wrap_to_pi(psi[window[after]] - psi[k0])))))
+        cut = max(0.0, -float(np.min(spd[window[after]] / spd[k0] - 1.0))) if spd[k0] > 0.0 else 0.0
+        altered = turn >= profile.starboard_min_deg or cut >= profile.speed_apparent
+        if k_must is not None or not kept_clear or (k_may is not None and altered):
+            v["17b"] = altered
             d["17b"] = {"from": t[k0], "heading_change_deg": turn, "speed_reduction": cut,
                         "t_must_act": q["t_must_act"], "cpa_distance": min_distance,
                         "collision_distance": collision_distance}
@@ -290,9 +292,10 @@ def _side(enc, t, pos, psi, spd, pos_o, psi_o, cpa_pred, tcpa_pred, dist, k_ente
             v["8"] = bool(acted and apparent and ample)
             d["8"] = {**size, **timing}
         if enc == "crossing-give-way":
-            v["15"] = turned_stbd and q["crossed_other_course"] != "ahead"
+            v["15"] = turned_stbd and q["crossed_other_course"] != "ahead" and kept_clear
             d["15"] = {"starboard_change_deg": stbd, "starboard_min_deg": profile.starboard_min_deg,
-                       "crossed_other_course": q["crossed_other_course"]}
+                       "crossed_other_course": q["crossed_other_course"], "cpa_distance": min_distance,
+                       "collision_distance": collision_distance}
         if enc == "head-on":
             v["14"] = turned_stbd and bearing_cpa < 0.0
             d["14"] = {"starboard_change_deg": stbd, "starboard_min_deg": profile.starboard_min_deg,
@@ -329,15 +332,16 @@ def score_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pro
       0 < TCPA < ``act_tcpa`` at the time of action); for an overtaking ship that never altered, not applicable;
       Rule 16 (crossing, overtaking): Rule 8's action and a CPA of at least ``collision_distance`` (an
       overtaking ship that never altered: the CPA alone);
-      Rule 15: a starboard alteration ≥ ``starboard_min_deg`` and never crossing the other's course line ahead
-      of her while within ``r_safe``; Rule 14: a starboard alteration ≥ ``starboard_min_deg`` and the other on
+      Rule 15: a starboard alteration ≥ ``starboard_min_deg``, never crossing the other's course line ahead
+      of her while within ``r_safe``, and a CPA of at least ``collision_distance``; Rule 14: a starboard alteration ≥ ``starboard_min_deg`` and the other on
       the port side at the CPA; Rule 13: CPA ≥ ``collision_distance``;
     * stand-on ships (crossing stand-on, overtaken) — Rule 17(a)(i) (``"17a"``): heading within
       ``course_tolerance_deg`` and speed within ``speed_tolerance`` from ``t_enter`` until she may act
       (:func:`stand_on_should_act`; the whole window if she never may; not applicable if she may at once);
-      Rule 17(b) (applicable if she must act, or if the CPA is below ``collision_distance`` — a stand-on ship
-      that holds her course into a collision fails it): from the time she may act (else ``t_enter``), an
-      alteration of at least ``starboard_min_deg`` or a speed cut of at least ``speed_apparent``; Rule 17(c)
+      Rules 17(a)(ii) and 17(b) (``"17b"``; applicable if she must act, if the CPA is below
+      ``collision_distance`` — a stand-on ship that holds her course into a collision fails it — or if she
+      altered after she may act): from the time she may act (else ``t_enter``), an alteration of at least
+      ``starboard_min_deg`` or a speed cut of at least ``speed_apparent``; Rule 17(c)
       (crossing only, if she altered at all): no sample with the heading ``starboard_min_deg`` or more to port
       of its initial value while the other ship is on her port side; Rule 8 (if she altered): readily apparent.
 
