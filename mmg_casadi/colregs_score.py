@@ -3,7 +3,8 @@
 For each ship of a pair, :func:`score_pair` gives a verdict per rule — ``True``, ``False`` or ``None`` (not
 applicable) — and the quantities behind it. The rules (COLREG, 1972, as amended):
 
-* Rule 8: action to avoid collision is taken in ample time and is large enough to be readily apparent;
+* Rule 8: action to avoid collision is taken in ample time, is large enough to be readily apparent and results
+  in passing at a safe distance (8(a), (b), (d));
 * Rule 13: an overtaking vessel keeps out of the way of the vessel being overtaken;
 * Rule 14: in a head-on situation each vessel alters course to starboard so that they pass port to port;
 * Rule 15: in a crossing the vessel that has the other on her starboard side keeps out of the way and avoids
@@ -285,12 +286,12 @@ def _side(enc, t, pos, psi, spd, pos_o, psi_o, cpa_pred, tcpa_pred, dist, k_ente
             v["17c"] = not bool(np.any(on_port & to_port))
             d["17c"] = {"port_change_deg": port, "starboard_min_deg": profile.starboard_min_deg}
         if acted:
-            v["8"] = apparent
-            d["8"] = size
+            v["8"] = apparent and kept_clear
+            d["8"] = {**size, "cpa_distance": min_distance, "collision_distance": collision_distance}
     else:
         if acted or enc != "overtaking":
-            v["8"] = bool(acted and apparent and ample)
-            d["8"] = {**size, **timing}
+            v["8"] = bool(acted and apparent and ample and kept_clear)
+            d["8"] = {**size, **timing, "cpa_distance": min_distance, "collision_distance": collision_distance}
         if enc == "crossing-give-way":
             v["15"] = turned_stbd and q["crossed_other_course"] != "ahead" and kept_clear
             d["15"] = {"starboard_change_deg": stbd, "starboard_min_deg": profile.starboard_min_deg,
@@ -329,12 +330,13 @@ def score_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pro
 
     * give-way (crossing give-way, overtaking) and head-on ships — Rule 8: she acted, with a readily apparent
       alteration (``apparent_deg`` or ``speed_apparent``), in ample time (range ≥ ``act_range`` and not
-      0 < TCPA < ``act_tcpa`` at the time of action); for an overtaking ship that never altered, not applicable;
-      Rule 16 (crossing, overtaking): Rule 8's action and a CPA of at least ``collision_distance`` (an
-      overtaking ship that never altered: the CPA alone);
+      0 < TCPA < ``act_tcpa`` at the time of action), and passed at a safe distance (CPA ≥
+      ``collision_distance``); for an overtaking ship that never altered, not applicable; Rule 16 (crossing,
+      overtaking): the same (an overtaking ship that never altered: the CPA alone);
       Rule 15: a starboard alteration ≥ ``starboard_min_deg``, never crossing the other's course line ahead
-      of her while within ``r_safe``, and a CPA of at least ``collision_distance``; Rule 14: a starboard alteration ≥ ``starboard_min_deg`` and the other on
-      the port side at the CPA; Rule 13: CPA ≥ ``collision_distance``;
+      of her while within ``r_safe``, and a CPA of at least ``collision_distance``; Rule 14: a starboard
+      alteration ≥ ``starboard_min_deg`` and the other on the port side at the CPA; Rule 13: CPA ≥
+      ``collision_distance``;
     * stand-on ships (crossing stand-on, overtaken) — Rule 17(a)(i) (``"17a"``): heading within
       ``course_tolerance_deg`` and speed within ``speed_tolerance`` from ``t_enter`` until she may act
       (:func:`stand_on_should_act`; the whole window if she never may; not applicable if she may at once);
@@ -343,7 +345,8 @@ def score_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pro
       altered after she may act): from the time she may act (else ``t_enter``), an alteration of at least
       ``starboard_min_deg`` or a speed cut of at least ``speed_apparent``; Rule 17(c)
       (crossing only, if she altered at all): no sample with the heading ``starboard_min_deg`` or more to port
-      of its initial value while the other ship is on her port side; Rule 8 (if she altered): readily apparent.
+      of its initial value while the other ship is on her port side; Rule 8 (if she altered): readily apparent
+      and passing at a safe distance (the timing of her action is Rule 17's).
 
     Parameters
     ----------

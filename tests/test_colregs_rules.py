@@ -81,6 +81,16 @@ def test_head_on_own_ship_turning_port_breaks_rule_14():
     assert s.b.verdicts["14"] is False and s.b.verdicts["8"] is False and s.b.quantities["t_action"] is None
 
 
+def test_head_on_alteration_in_time_but_too_small_to_pass_clear_breaks_rule_8d():
+    turn = ramp(20.5, 21.5, 10.5)  # 10.5 deg from TCPA 4.5: sideways about 2 x 4 sin(10.5 deg) = 1.5 L < 2 L
+    s = head_on(turn, math.pi + turn)
+    d8 = s.a.details["8"]
+    assert d8["heading_change_deg"] >= LAB.apparent_deg and d8["tcpa_at_action"] >= LAB.act_tcpa
+    assert d8["cpa_distance"] == pytest.approx(1.5, abs=0.15)
+    assert s.a.verdicts["8"] is False  # Rule 8(d): not passing at a safe distance
+    assert s.a.verdicts["14"] is True  # though to starboard and port to port
+
+
 # --- crossing, give-way (Rules 8, 15, 16) -----------------------------------------------------------------------
 
 def test_crossing_give_way_turning_30_deg_starboard_and_passing_astern():
