@@ -31,13 +31,7 @@ from .errors import check_range
 
 #: rule keys of a side's verdicts: 17a = 17(a)(i), 17b = 17(a)(ii) with 17(b), 17c = 17(c)
 RULES = ("8", "13", "14", "15", "16", "17a", "17b", "17c")
-_APPLICABLE = {
-    "crossing-give-way": ("8", "15", "16"),
-    "head-on": ("8", "14"),
-    "overtaking": ("8", "13", "16"),
-    "crossing-stand-on": ("8", "17a", "17b", "17c"),
-    "overtaken": ("8", "17a", "17b"),
-}
+_JUDGED = ("crossing-give-way", "head-on", "overtaking", "crossing-stand-on", "overtaken")
 
 
 def cpa_tcpa(rel_pos, rel_vel):
@@ -218,7 +212,7 @@ def _first(mask, window):
 def _side(enc, t, pos, psi, spd, pos_o, psi_o, cpa_pred, tcpa_pred, dist, k_enter, k_cpa, window, passage,
           min_distance, collision_distance, profile) -> SideScore:
     """Verdicts of the ship (pos, psi, spd) against the other (pos_o, psi_o) in encounter ``enc``."""
-    if enc not in _APPLICABLE:
+    if enc not in _JUDGED:
         return _empty_side(enc)
     deg = math.degrees
     dpsi = wrap_to_pi(psi[window] - psi[k_enter])
@@ -280,11 +274,12 @@ def _side(enc, t, pos, psi, spd, pos_o, psi_o, cpa_pred, tcpa_pred, dist, k_ente
             d["17b"] = {"from": t[k0], "heading_change_deg": turn, "speed_reduction": cut,
                         "t_must_act": q["t_must_act"], "cpa_distance": min_distance,
                         "collision_distance": collision_distance}
-        if enc == "crossing-stand-on" and acted:
-            on_port = np.array([_bearing(pos[k], psi[k], pos_o[k]) < 0.0 for k in window])
-            to_port = dpsi <= -math.radians(profile.starboard_min_deg)
-            v["17c"] = not bool(np.any(on_port & to_port))
-            d["17c"] = {"port_change_deg": port, "starboard_min_deg": profile.starboard_min_deg}
+        if enc == "crossing-stand-on" and k_may is not None and altered:
+            on_port = np.array([_bearing(pos[k], psi[k], pos_o[k]) < 0.0 for k in window[after]])
+            to_port = wrap_to_pi(psi[window[after]] - psi[k_may])
+            v["17c"] = not bool(np.any(on_port & (to_port <= -math.radians(profile.starboard_min_deg))))
+            d["17c"] = {"from": t[k_may], "port_change_deg": max(0.0, -deg(float(np.min(to_port)))),
+                        "starboard_min_deg": profile.starboard_min_deg}
         if acted:
             v["8"] = apparent and kept_clear
             d["8"] = {**size, "cpa_distance": min_distance, "collision_distance": collision_distance}
@@ -344,8 +339,9 @@ def score_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pro
       ``collision_distance`` — a stand-on ship that holds her course into a collision fails it — or if she
       altered after she may act): from the time she may act (else ``t_enter``), an alteration of at least
       ``starboard_min_deg`` or a speed cut of at least ``speed_apparent``; Rule 17(c)
-      (crossing only, if she altered at all): no sample with the heading ``starboard_min_deg`` or more to port
-      of its initial value while the other ship is on her port side; Rule 8 (if she altered): readily apparent
+      (crossing only, if she altered after she may act, as 17(c) is about action under 17(a)(ii)): from then
+      on, no sample with the heading ``starboard_min_deg`` or more to port of its value at that time while
+      the other ship is on her port side; Rule 8 (if she altered): readily apparent
       and passing at a safe distance (the timing of her action is Rule 17's).
 
     Parameters
