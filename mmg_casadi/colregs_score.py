@@ -240,11 +240,13 @@ def _side(enc, t, pos, psi, spd, pos_o, psi_o, cpa_pred, tcpa_pred, dist, k_ente
     }
     apparent = max(stbd, port) >= profile.apparent_deg or slow >= profile.speed_apparent
     tcpa_act = tcpa_pred[k_act] if acted else math.nan
-    ample = acted and dist[k_act] >= profile.act_range and not (0.0 < tcpa_act < profile.act_tcpa)
+    ample = acted and (cpa_pred[k_act] >= collision_distance
+                       or (dist[k_act] >= profile.act_range and not 0.0 < tcpa_act < profile.act_tcpa))
     kept_clear = min_distance >= collision_distance
     turned_stbd = stbd >= profile.starboard_min_deg
     timing = {"t_action": q["t_action"], "range_at_action": q["range_at_action"], "tcpa_at_action": tcpa_act,
-              "act_range": profile.act_range, "act_tcpa": profile.act_tcpa}
+              "cpa_predicted_at_action": cpa_pred[k_act] if acted else None, "act_range": profile.act_range,
+              "act_tcpa": profile.act_tcpa}
     size = {"heading_change_deg": max(stbd, port), "speed_reduction": slow, "apparent_deg": profile.apparent_deg,
             "speed_apparent": profile.speed_apparent}
     v: dict = {}
@@ -324,8 +326,9 @@ def score_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pro
     Verdicts per side (``None`` where the rule does not apply):
 
     * give-way (crossing give-way, overtaking) and head-on ships — Rule 8: she acted, with a readily apparent
-      alteration (``apparent_deg`` or ``speed_apparent``), in ample time (range ≥ ``act_range`` and not
-      0 < TCPA < ``act_tcpa`` at the time of action), and passed at a safe distance (CPA ≥
+      alteration (``apparent_deg`` or ``speed_apparent``), in ample time (at the time of action, no risk of
+      collision yet — predicted CPA ≥ ``collision_distance`` — or range ≥ ``act_range`` and not
+      0 < TCPA < ``act_tcpa``), and passed at a safe distance (CPA ≥
       ``collision_distance``); for an overtaking ship that never altered, not applicable; Rule 16 (crossing,
       overtaking): the same (an overtaking ship that never altered: the CPA alone);
       Rule 15: a starboard alteration ≥ ``starboard_min_deg``, never crossing the other's course line ahead

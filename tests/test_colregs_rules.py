@@ -91,6 +91,14 @@ def test_head_on_alteration_in_time_but_too_small_to_pass_clear_breaks_rule_8d()
     assert s.a.verdicts["14"] is True  # though to starboard and port to port
 
 
+def test_late_alteration_without_risk_of_collision_is_not_late():
+    turn = ramp(22, 23, 15)  # TCPA 3 < 4, but on courses 6 L apart there is no risk of collision to act on
+    s = score_pair(T, track((0, 0), turn), turn, track((50, -6), math.pi + turn), math.pi + turn, **KW)
+    d8 = s.a.details["8"]
+    assert d8["tcpa_at_action"] < LAB.act_tcpa and d8["cpa_predicted_at_action"] > 2.0
+    assert s.a.verdicts["8"] is True and s.a.verdicts["14"] is True
+
+
 # --- crossing, give-way (Rules 8, 15, 16) -----------------------------------------------------------------------
 
 def test_crossing_give_way_turning_30_deg_starboard_and_passing_astern():
