@@ -20,7 +20,9 @@ so the sign of ``beta`` does not matter for it.
 The rules (COLREG, as quoted in the paper): Rule 13, the overtaking vessel keeps out of the way; Rule 14, in a
 head-on situation each vessel alters course to starboard and they pass port to port; Rule 15, in a crossing the
 vessel that has the other on her starboard side gives way and avoids crossing ahead; the other stands on
-(Rule 17). :func:`assess_pair` checks these from trajectories, as described there.
+(Rule 17). :func:`assess_pair` checks these from trajectories rule by rule — with Rules 8 (ample time, readily
+apparent), 16 (early and substantial action) and 17(a)(i), (a)(ii)/(b) and (c) — through
+:func:`mmg_casadi.colregs_score.score_pair`, under a named :class:`ColregProfile` (:data:`PROFILES`).
 """
 
 from __future__ import annotations
@@ -311,7 +313,7 @@ class PairAssessment:
     ``t_min``: its time (time of the closest point of approach, CPA; ``None`` if never both active);
     ``encounter``: the encounter type from a's point of view when the distance first drops below ``r_safe``
     (one of :data:`ENCOUNTERS`, ``"none"`` if it never does, ``"static"`` for an obstacle); ``compliant``: whether
-    a kept her rule (``None`` when there is no rule to check); ``encounter_b``, ``compliant_b``: the same from
+    a kept every rule that applies to her (``None`` when there is none); ``encounter_b``, ``compliant_b``: the same from
     b's point of view; ``t_enter``: the time the distance first drops below ``r_safe`` (``None`` if never);
     ``rules``: the rule-by-rule verdicts behind ``compliant``/``compliant_b``
     (:meth:`mmg_casadi.colregs_score.PairScore.to_dict`; ``None`` for an obstacle; not compared by ``==``).
