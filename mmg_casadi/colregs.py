@@ -169,11 +169,13 @@ class ColregProfile:
     def ntnu_2023(cls, metres_per_length: float = 230.0) -> ColregProfile:
         """The NTNU evaluation scheme of Hagen et al. (2023), binarised.
 
-        Source: I. B. Hagen, O. Vassbotn, M. Skogvold, T. A. Johansen, E. F. Brekke, "Safety and COLREG
-        evaluation for marine collision avoidance algorithms", Ocean Engineering 288 (2023) 115991,
-        doi:10.1016/j.oceaneng.2023.115991, which builds on Woerner et al., Autonomous Robots 43 (2019)
-        967–991, doi:10.1007/s10514-018-9765-y. The numbers were read in the authors' public simulator,
-        github.com/NTNU-TTO/SFI-AutoShip-COLAV-simulator, ``config/evaluator.yaml`` (commit 2232044):
+        Source: Hagen et al., "Safety and COLREG evaluation for marine collision avoidance algorithms", Ocean
+        Engineering (2023), doi:10.1016/j.oceaneng.2023.115991 (title, DOI and abstract read at
+        ntnuopen.ntnu.no, handle 11250/3104668; the paper body was not available), a scheme in the line of
+        K. Woerner, M. R. Benjamin, M. Novitzky, J. J. Leonard, "Quantifying protocol evaluation for autonomous
+        collision avoidance", Autonomous Robots, doi:10.1007/s10514-018-9765-y. The numbers were read in the
+        NTNU group's public simulator, github.com/NTNU-TTO/SFI-AutoShip-COLAV-simulator,
+        ``config/evaluator.yaml`` (commit 2232044):
         ``theta_critical_ho`` 13° (head-on: each ship within 13° of the other's bow), ``theta_critical_ot`` 45°,
         ``theta_ot_min``/``theta_ot_max`` 112.5°/247.5° (overtaking), ``theta_sm_lim`` 10° (a starboard
         manoeuvre), ``delta_course_md`` 2° (smallest detectable course change), ``delta_course_app`` 30°
