@@ -100,8 +100,11 @@ class ColregProfile:
     22.5° abaft the beam; the sector the modified vortex also uses). Its tolerances are ours: course 15°,
     starboard 5°, action 2°, apparent 10°, speed 20 % (tolerance) and 50 % (apparent, as NTNU below), ample
     time TCPA ≥ 4 (≈ 75 s at full scale, L/U = 18.6 s for the KCS) with no range criterion (so that slow
-    overtakings are not judged late), and 17(b) at TCPA ≤ 2 (≈ 37 s). :meth:`ntnu_2023` is a published
-    scheme, :meth:`strict` a narrow head-on sector.
+    overtakings are not judged late), and 17(b) at TCPA ≤ 2 (≈ 37 s). The two times come from our KCS model
+    (:func:`~mmg_casadi.maneuvers.turning_circle` at design speed, 35° rudder from midships): 10°, 30° and 60°
+    alterations take 1.4, 2.5 and 3.7 L/U; at TCPA 4 a 60° alteration can still be completed before the CPA,
+    at TCPA 2 not even a 30° one. :meth:`ntnu_2023` is a published scheme, :meth:`strict` a narrow head-on
+    sector.
 
     Examples
     --------
