@@ -284,3 +284,12 @@ def test_no_encounter_has_no_verdicts():
     s = score_pair(T, track((0, 0), psi), psi, track((0, 20), psi), psi, **KW)
     assert s.a.encounter == s.b.encounter == "none"
     assert set(s.a.verdicts.values()) == {None} and s.a.compliant_all is None
+
+
+def test_lab_tcpa_thresholds_bracket_the_kcs_turning_times():
+    from mmg_casadi.maneuvers import turning_circle
+    r = turning_circle(35.0, t_end=40.0)
+    psi = np.degrees(r.state("psi"))
+    t30, t60 = (float(np.interp(d, psi, r.t)) for d in (30.0, 60.0))
+    assert t60 < LAB.act_tcpa  # a 60 deg alteration started at TCPA 4 is complete before the CPA
+    assert t30 > LAB.must_act_tcpa  # from TCPA 2 not even a 30 deg one is
