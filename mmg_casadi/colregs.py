@@ -20,17 +20,19 @@ so the sign of ``beta`` does not matter for it.
 The rules (COLREG, as quoted in the paper): Rule 13, the overtaking vessel keeps out of the way; Rule 14, in a
 head-on situation each vessel alters course to starboard and they pass port to port; Rule 15, in a crossing the
 vessel that has the other on her starboard side gives way and avoids crossing ahead; the other stands on
-(Rule 17). :func:`assess_pair` checks these from trajectories, as described there.
+(Rule 17). :func:`assess_pair` checks these from trajectories rule by rule — with Rules 8 (ample time, readily
+apparent), 16 (early and substantial action) and 17(a)(i), (a)(ii)/(b) and (c) — through
+:func:`mmg_casadi.colregs_score.score_pair`, under a named :class:`ColregProfile` (:data:`PROFILES`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .errors import ParameterError, check_range
+from .errors import InputError, ParameterError, check_range
 
 TWO_PI = 2.0 * math.pi
 ENCOUNTERS = ("overtaking", "overtaken", "head-on", "crossing-give-way", "crossing-stand-on", "none")
@@ -58,24 +60,57 @@ def _in_sector(angle: float, sector: tuple[float, float]) -> bool:
 
 @dataclass(frozen=True)
 class ColregProfile:
-    """Named COLREG sector thresholds.
+    """Named COLREG thresholds: encounter sectors and the tolerances of the rule-by-rule scorer.
 
-    ``head_on``, ``give_way``, ``stand_on``: sectors ``[lo, hi)`` of the relative heading ψ_r (rad, in
-    [0, 2π)); ``stern_sector``: sector of the relative bearing β (rad) that counts as "astern" (overtaking,
-    Rule 13: more than 22.5° abaft the beam); ``course_tolerance_deg``: the largest heading change (degrees) a
-    stand-on or overtaken ship may make and still count as keeping her course; ``starboard_min_deg``: the
-    smallest starboard alteration (degrees) that counts as "altering course to starboard". A sector with
-    ``lo > hi`` wraps through 0.
+    Encounter sectors (rad, sectors ``[lo, hi)``; a sector with ``lo > hi`` wraps through 0):
 
-    The default is the paper's laboratory profile (``shared/data/README.md``): head-on 7π/8 ≤ ψ_r < 9π/8
-    (±22.5°), give-way 3π/8 ≤ ψ_r < 7π/8, stand-on 9π/8 ≤ ψ_r < 13π/8, stern sector 5π/8 ≤ β < 11π/8
-    (112.5° to 247.5°, the sector the modified vortex also uses). The two tolerances are ours.
+    * ``head_on``, ``give_way``, ``stand_on``: sectors of the relative heading ψ_r in [0, 2π);
+    * ``stern_sector``: sector of the relative bearing β that counts as "astern" (overtaking, Rule 13: more than
+      22.5° abaft the beam);
+    * ``head_on_bearing_deg`` (degrees or ``None``): if set, head-on is decided by bearings instead of ``head_on``:
+      each ship sees the other within this angle of her bow; the other (non-astern) encounters with ψ_r inside
+      ``give_way`` or ``stand_on`` or ``head_on`` are then crossings, give-way if the other ship is on the own
+      starboard side (β in (0, π)), stand-on otherwise;
+    * ``overtaking_bow_deg`` (degrees or ``None``): if set, an overtaking also needs the overtaken ship within
+      this angle of the overtaking ship's bow.
+
+    Tolerances (degrees, ship lengths L, non-dimensional time L/U, or fractions of the speed at ``t_enter``):
+
+    * ``course_tolerance_deg``: the largest heading change a stand-on or overtaken ship may make and still keep
+      her course (Rule 17(a)(i)); ``speed_tolerance``: the largest relative speed change she may make;
+    * ``starboard_min_deg``: the smallest alteration that counts as "altering course" (to starboard for Rules
+      14 and 15, either way for the stand-on ship's action under 17(b) and the port turn of 17(c));
+    * ``action_deg``: the heading change (from the heading at ``t_enter``) whose first excess marks the time of
+      action;
+    * ``apparent_deg``, ``speed_apparent``: an alteration of course of at least ``apparent_deg`` or a speed
+      reduction of at least ``speed_apparent`` is "large enough to be readily apparent" (Rules 8, 16);
+    * ``act_range`` (L), ``act_tcpa``: action is "in ample time" (Rules 8, 16) if it starts with the range at
+      least ``act_range`` and the time to the closest point of approach (TCPA) at least ``act_tcpa``; past that
+      point (range ≤ ``act_range`` or 0 < TCPA ≤ ``act_tcpa``) with a risk of collision, the stand-on ship may
+      act alone (Rule 17(a)(ii));
+    * ``must_act_range`` (L), ``must_act_tcpa``: with a risk of collision and range ≤ ``must_act_range`` or
+      0 < TCPA ≤ ``must_act_tcpa``, collision can no longer be avoided by the give-way ship alone and the
+      stand-on ship must act (Rule 17(b)). A zero range or time switches that criterion off.
+
+    "Risk of collision" is a straight-line prediction: closing (TCPA > 0) to a closest point of approach (CPA)
+    nearer than the collision distance.
+
+    The default, ``iitm-lab``, is the paper's laboratory profile: head-on 7π/8 ≤ ψ_r < 9π/8 (±22.5°), give-way
+    3π/8 ≤ ψ_r < 7π/8, stand-on 9π/8 ≤ ψ_r < 13π/8, stern sector 5π/8 ≤ β < 11π/8 (112.5° to 247.5°, Rule 13's
+    22.5° abaft the beam; the sector the modified vortex also uses). Its tolerances are ours: course 15°,
+    starboard 5°, action 2°, apparent 10°, speed 20 % (tolerance) and 50 % (apparent, as NTNU below), ample
+    time TCPA ≥ 4 (≈ 75 s at full scale, L/U = 18.6 s for the KCS) with no range criterion (so that slow
+    overtakings are not judged late), and 17(b) at TCPA ≤ 2 (≈ 37 s). The two times come from our KCS model
+    (:func:`~mmg_casadi.maneuvers.turning_circle` at design speed, 35° rudder from midships): 10°, 30° and 60°
+    alterations take 1.4, 2.5 and 3.7 L/U; at TCPA 4 a 60° alteration can still be completed before the CPA,
+    at TCPA 2 not even a 30° one. :meth:`ntnu_2023` is a published scheme, :meth:`strict` a narrow head-on
+    sector.
 
     Examples
     --------
     >>> p = ColregProfile()
-    >>> p.name, round(math.degrees(p.head_on[1] - p.head_on[0]), 1)
-    ('iitm-lab', 45.0)
+    >>> p.name, round(math.degrees(p.head_on[1] - p.head_on[0]), 1), p.apparent_deg, p.act_tcpa
+    ('iitm-lab', 45.0, 10.0, 4.0)
     """
 
     name: str = "iitm-lab"
@@ -85,6 +120,16 @@ class ColregProfile:
     stern_sector: tuple[float, float] = (5 * math.pi / 8, 11 * math.pi / 8)
     course_tolerance_deg: float = 15.0
     starboard_min_deg: float = 5.0
+    head_on_bearing_deg: float | None = None
+    overtaking_bow_deg: float | None = None
+    action_deg: float = 2.0
+    apparent_deg: float = 10.0
+    speed_apparent: float = 0.5
+    speed_tolerance: float = 0.2
+    act_range: float = 0.0
+    act_tcpa: float = 4.0
+    must_act_range: float = 0.0
+    must_act_tcpa: float = 2.0
 
     def __post_init__(self):
         for key in ("head_on", "give_way", "stand_on", "stern_sector"):
@@ -92,8 +137,17 @@ class ColregProfile:
             if len(sector) != 2 or not all(0.0 <= a <= TWO_PI for a in sector) or sector[0] == sector[1]:
                 raise ParameterError(key, "a sector (lo, hi) of two different angles in [0, 2π] rad", sector)
             object.__setattr__(self, key, sector)
-        check_range("course_tolerance_deg", self.course_tolerance_deg, 0.0, 180.0, unit="degrees")
-        check_range("starboard_min_deg", self.starboard_min_deg, 0.0, 180.0, unit="degrees")
+        for key in ("course_tolerance_deg", "starboard_min_deg", "action_deg", "apparent_deg"):
+            check_range(key, getattr(self, key), 0.0, 180.0, unit="degrees")
+        for key in ("head_on_bearing_deg", "overtaking_bow_deg"):
+            if getattr(self, key) is not None:
+                check_range(key, getattr(self, key), 0.0, 180.0, low_open=True, unit="degrees")
+        for key in ("speed_apparent", "speed_tolerance"):
+            check_range(key, getattr(self, key), 0.0, 1.0, unit="(fraction of the speed)")
+        for key in ("act_range", "must_act_range"):
+            check_range(key, getattr(self, key), 0.0, None, unit="L")
+        for key in ("act_tcpa", "must_act_tcpa"):
+            check_range(key, getattr(self, key), 0.0, None, unit="(time, L/U)")
 
     @classmethod
     def strict(cls) -> ColregProfile:
@@ -114,8 +168,68 @@ class ColregProfile:
         return cls(name="strict", head_on=(math.pi - half, math.pi + half), give_way=(3 * math.pi / 8, math.pi - half),
                    stand_on=(math.pi + half, 13 * math.pi / 8))
 
+    @classmethod
+    def ntnu_2023(cls, metres_per_length: float = 230.0) -> ColregProfile:
+        """The NTNU evaluation scheme of Hagen et al. (2023), binarised.
+
+        Source: Hagen et al., "Safety and COLREG evaluation for marine collision avoidance algorithms", Ocean
+        Engineering (2023), doi:10.1016/j.oceaneng.2023.115991 (title, DOI and abstract read at
+        ntnuopen.ntnu.no, handle 11250/3104668; the paper body was not available), a scheme in the line of
+        K. Woerner, M. R. Benjamin, M. Novitzky, J. J. Leonard, "Quantifying protocol evaluation for autonomous
+        collision avoidance", Autonomous Robots, doi:10.1007/s10514-018-9765-y. The numbers were read in the
+        NTNU group's public simulator, github.com/NTNU-TTO/SFI-AutoShip-COLAV-simulator,
+        ``config/evaluator.yaml`` (commit 2232044):
+        ``theta_critical_ho`` 13° (head-on: each ship within 13° of the other's bow), ``theta_critical_ot`` 45°,
+        ``theta_ot_min``/``theta_ot_max`` 112.5°/247.5° (overtaking), ``theta_sm_lim`` 10° (a starboard
+        manoeuvre), ``delta_course_md`` 2° (smallest detectable course change), ``delta_course_app`` 30°
+        (readily apparent), ``delta_speed_reduction_app`` 0.5 and ``delta_speed_md`` 0.2 (apparent and
+        detectable relative speed changes), ``r_colregs_3_max`` 1100 m and ``r_colregs_4_max`` 200 m (the
+        ranges where stages 3, close quarters, and 4, imminent collision, begin).
+
+        Binarisation (ours; the scheme scores continuously): the stand-on ship keeps course if no detectable
+        change (2°) is made, the give-way ship acts in ample time if she starts before stage 3 (range
+        ≥ 1100 m), and the stand-on ship may act from stage 3 and must act in stage 4 (range ≤ 200 m), each
+        with a risk of collision. The scheme's crossing split ``theta_critical_cr`` (−10°) is not used (its sign
+        convention is not defined in the file); crossings split at β = 0. No time criteria (TCPA) are used.
+
+        Ranges in metres are divided by ``metres_per_length``: the default 230 m, the KCS length, keeps the
+        full-scale distances (1100 m = 4.78 L, 200 m = 0.87 L). The scheme was tuned on smaller ships; a
+        length-scaled reading would pass the length of the ship the ranges were meant for instead.
+
+        Examples
+        --------
+        >>> p = ColregProfile.ntnu_2023()
+        >>> p.name, p.head_on_bearing_deg, p.apparent_deg, round(p.act_range, 2), round(p.must_act_range, 2)
+        ('ntnu-2023', 13.0, 30.0, 4.78, 0.87)
+        """
+        m = check_range("metres_per_length", metres_per_length, 0.0, None, low_open=True, unit="m")
+        return cls(name="ntnu-2023", head_on=(7 * math.pi / 8, 9 * math.pi / 8), give_way=(3 * math.pi / 8, math.pi),
+                   stand_on=(math.pi, 13 * math.pi / 8), head_on_bearing_deg=13.0, overtaking_bow_deg=45.0,
+                   course_tolerance_deg=2.0, starboard_min_deg=10.0, action_deg=2.0, apparent_deg=30.0,
+                   speed_apparent=0.5, speed_tolerance=0.2, act_range=1100.0 / m, act_tcpa=0.0,
+                   must_act_range=200.0 / m, must_act_tcpa=0.0)
+
 
 LAB_PROFILE = ColregProfile()
+PROFILES = ("iitm-lab", "ntnu-2023", "strict")  #: names accepted by :func:`get_profile`
+
+
+def get_profile(profile=None) -> ColregProfile:
+    """A :class:`ColregProfile` from its name (one of :data:`PROFILES`), itself, or ``None`` (the laboratory's).
+
+    Examples
+    --------
+    >>> get_profile().name, get_profile("ntnu-2023").name, get_profile(ColregProfile.strict()).name
+    ('iitm-lab', 'ntnu-2023', 'strict')
+    """
+    if profile is None:
+        return LAB_PROFILE
+    if isinstance(profile, ColregProfile):
+        return profile
+    makers = {"iitm-lab": ColregProfile, "ntnu-2023": ColregProfile.ntnu_2023, "strict": ColregProfile.strict}
+    if profile not in makers:
+        raise InputError("profile", f"one of: {', '.join(PROFILES)}", profile)
+    return makers[profile]()
 
 
 def _bearing(own_pos, own_psi, other_pos) -> float:
@@ -133,7 +247,10 @@ def classify_encounter(own_pos, own_psi, other_pos, other_psi, profile: ColregPr
     the relative heading decides: ``"head-on"``, ``"crossing-give-way"`` or ``"crossing-stand-on"``. Relative
     headings outside all three sectors (courses within 67.5° of each other, e.g. ships abeam or diverging on
     similar courses) give ``"none"``: no rule applies. Only positions and headings are used, so a ship in the
-    other's stern sector counts as overtaking whatever the speeds (as in the laboratory's table).
+    other's stern sector counts as overtaking whatever the speeds (as in the laboratory's table). A profile with
+    ``overtaking_bow_deg`` also needs the overtaken ship within that angle of the overtaker's bow (else
+    ``"none"``); one with ``head_on_bearing_deg`` decides head-on by bearings and the crossing side by the side
+    the other ship is on (see :class:`ColregProfile`).
 
     Parameters
     ----------
@@ -165,15 +282,25 @@ def classify_encounter(own_pos, own_psi, other_pos, other_psi, profile: ColregPr
     >>> classify_encounter((0, 0), 0.0, (0, 10), 0.0)
     'none'
     """
-    beta_other = _bearing(own_pos, own_psi, other_pos) % TWO_PI
-    beta_own = _bearing(other_pos, other_psi, own_pos) % TWO_PI
-    other_astern = _in_sector(beta_other, profile.stern_sector)
-    own_astern = _in_sector(beta_own, profile.stern_sector)
+    beta = _bearing(own_pos, own_psi, other_pos)
+    alpha = _bearing(other_pos, other_psi, own_pos)
+    other_astern = _in_sector(beta % TWO_PI, profile.stern_sector)
+    own_astern = _in_sector(alpha % TWO_PI, profile.stern_sector)
     if other_astern or own_astern:
         if other_astern and own_astern:
             return "none"
+        bow = profile.overtaking_bow_deg
+        if bow is not None and abs(beta if own_astern else alpha) >= math.radians(bow):
+            return "none"
         return "overtaken" if other_astern else "overtaking"
     psi_r = (own_psi - other_psi) % TWO_PI
+    if profile.head_on_bearing_deg is not None:
+        if not any(_in_sector(psi_r, sec) for sec in (profile.head_on, profile.give_way, profile.stand_on)):
+            return "none"
+        limit = math.radians(profile.head_on_bearing_deg)
+        if abs(alpha) < limit and abs(beta) < limit:
+            return "head-on"
+        return "crossing-give-way" if beta > 0.0 else "crossing-stand-on"
     if _in_sector(psi_r, profile.head_on):
         return "head-on"
     if _in_sector(psi_r, profile.give_way):
@@ -191,8 +318,10 @@ class PairAssessment:
     ``t_min``: its time (time of the closest point of approach, CPA; ``None`` if never both active);
     ``encounter``: the encounter type from a's point of view when the distance first drops below ``r_safe``
     (one of :data:`ENCOUNTERS`, ``"none"`` if it never does, ``"static"`` for an obstacle); ``compliant``: whether
-    a kept her rule (``None`` when there is no rule to check); ``encounter_b``, ``compliant_b``: the same from
-    b's point of view; ``t_enter``: the time the distance first drops below ``r_safe`` (``None`` if never).
+    a kept every rule that applies to her (``None`` when there is none); ``encounter_b``, ``compliant_b``: the same from
+    b's point of view; ``t_enter``: the time the distance first drops below ``r_safe`` (``None`` if never);
+    ``rules``: the rule-by-rule verdicts behind ``compliant``/``compliant_b``
+    (:meth:`mmg_casadi.colregs_score.PairScore.to_dict`; ``None`` for an obstacle; not compared by ``==``).
 
     Examples
     --------
@@ -207,6 +336,7 @@ class PairAssessment:
     encounter_b: str
     compliant_b: bool | None
     t_enter: float | None
+    rules: dict | None = field(default=None, compare=False)
 
     def to_dict(self) -> dict:
         """The assessment as a plain dict."""
@@ -236,77 +366,16 @@ def _series(t, pos_a, psi_a, pos_b, psi_b, active_a, active_b):
     return (*out, both)
 
 
-def _turned_starboard(psi, k_enter, window, profile) -> bool:
-    """True if the heading rose at least ``starboard_min_deg`` above its value at entry within ``window``."""
-    change = wrap_to_pi(psi[window] - psi[k_enter])
-    return bool(np.max(change) >= math.radians(profile.starboard_min_deg))
-
-
-def _kept_course(psi, k_enter, window, profile) -> bool:
-    """True if the heading stayed within ``course_tolerance_deg`` of its value at entry within ``window``."""
-    change = np.abs(wrap_to_pi(psi[window] - psi[k_enter]))
-    return bool(np.max(change) <= math.radians(profile.course_tolerance_deg))
-
-
-def _heading_unit(psi):
-    """Unit heading vectors (T, 2) of headings ``psi`` (rad)."""
-    return np.column_stack([np.cos(psi), np.sin(psi)])
-
-
-def _passed_astern(pos, pos_o, psi_o, passage) -> bool:
-    """True if every crossing of the other's course line within ``passage`` happened astern of her.
-
-    The course line is the line through the other ship along her current heading; a crossing is a sign change
-    of ``cross(h_o, p - p_o)`` between consecutive nonzero samples, and it is astern if ``dot(h_o, p - p_o) < 0``
-    there (linearly interpolated). No crossing at all counts as passing astern.
-    """
-    rel = pos[passage] - pos_o[passage]
-    h = _heading_unit(psi_o[passage])
-    side = h[:, 0] * rel[:, 1] - h[:, 1] * rel[:, 0]
-    along = np.einsum("ij,ij->i", h, rel)
-    nz = np.flatnonzero(side != 0.0)
-    for k0, k1 in zip(nz[:-1], nz[1:]):
-        if side[k0] * side[k1] < 0.0:
-            f = side[k0] / (side[k0] - side[k1])
-            if along[k0] + f * (along[k1] - along[k0]) >= 0.0:
-                return False
-    return True
-
-
-def _compliance(encounter, pos, psi, pos_o, psi_o, k_enter, k_cpa, window, passage, min_distance,
-                collision_distance, profile) -> bool | None:
-    """Whether a ship with trajectory (pos, psi) kept her rule in ``encounter`` against (pos_o, psi_o)."""
-    if encounter == "crossing-give-way":
-        return _turned_starboard(psi, k_enter, window, profile) and _passed_astern(pos, pos_o, psi_o, passage)
-    if encounter == "head-on":
-        port_to_port = _bearing(pos[k_cpa], psi[k_cpa], pos_o[k_cpa]) < 0.0
-        return _turned_starboard(psi, k_enter, window, profile) and bool(port_to_port)
-    if encounter in ("crossing-stand-on", "overtaken"):
-        return _kept_course(psi, k_enter, window, profile)
-    if encounter == "overtaking":
-        return bool(min_distance >= collision_distance)
-    return None
-
-
 def assess_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, profile: ColregProfile = LAB_PROFILE,
-                active_a=None, active_b=None) -> PairAssessment:
+                active_a=None, active_b=None, speed_a=None, speed_b=None) -> PairAssessment:
     """Encounter type and rule compliance of ships a and b from their trajectories.
 
     Distances count only at samples where both ships are active (still sailing). The encounter is fixed at
     ``t_enter``, the first such sample with distance < ``r_safe``, by :func:`classify_encounter` from each
-    ship's point of view; the closest point of approach (CPA) is at ``t_min``. Compliance, from each side,
-    judged on the window [t_enter, t_min]:
-
-    * crossing, give way (Rule 15): alters to starboard (the heading rises at least ``starboard_min_deg`` above
-      its value at ``t_enter``) AND passes astern: every crossing of the other's course line while the ships
-      are within ``r_safe`` (from ``t_enter`` until the distance is back at ``r_safe`` or more) happens behind
-      her;
-    * head-on (Rule 14): alters to starboard AND passes port to port (the other on the own ship's port side,
-      bearing in [-π, 0), at the CPA);
-    * crossing, stand on, or overtaken (Rules 13, 17): keeps her course, every heading within
-      ``course_tolerance_deg`` of the heading at ``t_enter``;
-    * overtaking (Rule 13): keeps clear, ``min_distance >= collision_distance``;
-    * none: ``None``.
+    ship's point of view; the closest point of approach (CPA) is at ``t_min``. ``compliant`` (a) and
+    ``compliant_b`` (b): every rule that applies to the ship is satisfied, ``None`` if none applies; the
+    verdicts, rule by rule (8, 13, 14, 15, 16, 17(a)(i), 17(b), 17(c)), and the quantities behind them are in
+    ``rules``, from :func:`mmg_casadi.colregs_score.score_pair` (see there for each rule's test).
 
     Parameters
     ----------
@@ -318,10 +387,12 @@ def assess_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pr
         Headings (rad, from x towards y; wrapped or continuous).
     r_safe, collision_distance : float
         Safe radius and collision distance (L).
-    profile : ColregProfile
-        Sector thresholds and tolerances.
+    profile : ColregProfile or str
+        Sector thresholds and tolerances, or a profile name (:func:`get_profile`).
     active_a, active_b : array (T,) of bool, optional
         Whether each ship is still sailing (default: always).
+    speed_a, speed_b : array (T,), optional
+        Speeds (default: from the positions).
 
     Examples
     --------
@@ -332,7 +403,12 @@ def assess_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pr
     >>> r = assess_pair(t, a, 0.0 * t, b, np.pi + 0.0 * t, r_safe=15.0, collision_distance=2.0)
     >>> r.encounter, r.compliant, r.encounter_b, r.compliant_b, r.t_enter, r.min_distance
     ('head-on', False, 'head-on', False, 17.75, 2.0)
+    >>> r.rules["profile"], r.rules["a"]["14"]["verdict"], r.rules["a"]["8"]["verdict"]
+    ('iitm-lab', False, False)
     """
+    from .colregs_score import score_pair
+
+    profile = get_profile(profile)
     t, pos_a, psi_a, pos_b, psi_b, both = _series(t, pos_a, psi_a, pos_b, psi_b, active_a, active_b)
     r_safe = check_range("r_safe", r_safe, 0.0, None, low_open=True, unit="L")
     collision_distance = check_range("collision_distance", collision_distance, 0.0, None, low_open=True, unit="L")
@@ -343,20 +419,11 @@ def assess_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pr
     j_min = int(np.argmin(d))
     min_distance, k_cpa = float(d[j_min]), int(idx[j_min])
     inside = np.flatnonzero(d < r_safe)
-    if inside.size == 0:
-        return PairAssessment(min_distance, float(t[k_cpa]), "none", None, "none", None, None)
-    j_enter = int(inside[0])
-    k_enter = int(idx[j_enter])
-    outside_after = np.flatnonzero(d[j_min:] >= r_safe)
-    j_exit = j_min + int(outside_after[0]) if outside_after.size else idx.size - 1
-    window = idx[j_enter:j_min + 1]
-    passage = idx[j_enter:j_exit + 1]
-    enc_a = classify_encounter(pos_a[k_enter], psi_a[k_enter], pos_b[k_enter], psi_b[k_enter], profile)
-    enc_b = classify_encounter(pos_b[k_enter], psi_b[k_enter], pos_a[k_enter], psi_a[k_enter], profile)
-    common = (k_enter, k_cpa, window, passage, min_distance, collision_distance, profile)
-    ok_a = _compliance(enc_a, pos_a, psi_a, pos_b, psi_b, *common)
-    ok_b = _compliance(enc_b, pos_b, psi_b, pos_a, psi_a, *common)
-    return PairAssessment(min_distance, float(t[k_cpa]), enc_a, ok_a, enc_b, ok_b, float(t[k_enter]))
+    t_enter = float(t[idx[inside[0]]]) if inside.size else None
+    score = score_pair(t, pos_a, psi_a, pos_b, psi_b, r_safe=r_safe, collision_distance=collision_distance,
+                       profile=profile, speed_a=speed_a, speed_b=speed_b, active_a=active_a, active_b=active_b)
+    return PairAssessment(min_distance, float(t[k_cpa]), score.a.encounter, score.a.compliant_all,
+                          score.b.encounter, score.b.compliant_all, t_enter, score.to_dict())
 
 
 def assess_obstacle(t, pos_a, obstacle_pos, radius, collision_distance, *, active_a=None) -> PairAssessment:

@@ -241,6 +241,19 @@ def linearise(state, inputs, ship: ShipParams | None = None, steering: SteeringP
     an :class:`~mmg_casadi.environment.Environment`) the disturbed model is linearised, ``u, v`` being
     velocities through the water.
 
+    Parameters
+    ----------
+    state : sequence of 7 floats
+        ``[u, v, r, x, y, psi, delta]`` (prime-II).
+    inputs : sequence of 2 floats
+        ``[delta_c, n_rpm]`` (rad, rev/min).
+    ship, steering : ShipParams, SteeringParams, optional
+        Ship and steering gear (default: the KCS).
+    env : sequence of 4 floats or Environment, optional
+        Current and wind ``[V_c, beta_c, U_w, psi_w]``; calm water if omitted.
+    windage : Windage, optional
+        Projected areas for the wind load (default: the KCS estimate).
+
     Examples
     --------
     >>> A, B = linearise([1.0, 0, 0, 0, 0, 0, 0], [0.0, 115.5])

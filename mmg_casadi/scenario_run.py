@@ -8,11 +8,13 @@
                 "collided": bool, "collision_time": float|null, "collision_with": str|null,
                 "min_distance": float, "stalled_at": [x, y]|null, "reactive_time": float}],
      "pairs": [{"a", "b", "min_distance", "t_min", "encounter", "compliant",
-                "encounter_b", "compliant_b", "t_enter"}]}
+                "encounter_b", "compliant_b", "t_enter", "rules"}]}
 
 ``encounter``/``compliant`` are from ship ``a``'s side (``encounter_b``/``compliant_b`` from ``b``'s);
-static obstacles appear as ``b = "obstacle<k>"`` with encounter ``"static"``. Outcome, CE and MCTE come from
-:meth:`mmg_casadi.closed_loop.ClosedLoopModel.outcomes` (``ce``/``mcte`` are null for a diverged ship).
+static obstacles appear as ``b = "obstacle<k>"`` with encounter ``"static"`` (no ``rules``). ``rules`` is the
+rule-by-rule COLREG scoring of a ship pair under the chosen profile (:func:`mmg_casadi.colregs_score.score_pair`).
+Outcome, CE and MCTE come from :meth:`mmg_casadi.closed_loop.ClosedLoopModel.outcomes` (``ce``/``mcte`` are null
+for a diverged ship).
 """
 
 from __future__ import annotations
@@ -137,8 +139,8 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
         ``[settings]``.
     method : str, optional
         Replace the scenario's ``settings.method`` (per-ship overrides are kept).
-    profile : ColregProfile, optional
-        COLREG sector thresholds of the assessment (default: the paper laboratory's).
+    profile : ColregProfile or str, optional
+        COLREG threshold profile of the assessment or its name (default: the paper laboratory's).
 
     Returns
     -------
@@ -192,11 +194,12 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
         Its rollout.
     params : dict
         The resolved parameter set it ran with (:func:`mmg_casadi.params.resolve`).
-    profile : ColregProfile, optional
-        COLREG sector thresholds (default: the paper laboratory's).
+    profile : ColregProfile or str, optional
+        COLREG threshold profile or its name (:data:`mmg_casadi.colregs.PROFILES`; default: the paper
+        laboratory's).
     """
     from .closed_loop import ClosedLoopModel
-    profile = profile or colregs.ColregProfile()
+    profile = colregs.get_profile(profile)
     g = {k: params[k] for k in ("r_safe", "collision_distance")}
     names = [s.name for s in sc.ships]
     N = len(names)
@@ -234,7 +237,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
             pairs.append({"a": names[i], "b": names[j], "min_distance": float(a.min_distance),
                           "t_min": float(a.t_min), "encounter": a.encounter, "compliant": a.compliant,
                           "encounter_b": a.encounter_b, "compliant_b": a.compliant_b,
-                          "t_enter": None if a.t_enter is None else float(a.t_enter)})
+                          "t_enter": None if a.t_enter is None else float(a.t_enter), "rules": a.rules})
             for k, enc, ok in ((i, a.encounter, a.compliant), (j, a.encounter_b, a.compliant_b)):
                 if enc not in (None, "none"):
                     tag = f"{enc} {'✓' if ok else '✗' if ok is not None else ''}".strip()

@@ -150,7 +150,10 @@ def test_crossing_give_way_holding_course_is_not_compliant():
     psi_a, psi_b = const(0.0), const(-math.pi / 2)
     r = assess_pair(T, track((0, 0), psi_a), psi_a, track((25, 25), psi_b), psi_b, **KW)
     assert r.compliant is False and r.min_distance < 2.0
-    assert r.compliant_b is True  # the stand-on ship held her course
+    # the stand-on ship held her course into the collision: Rule 17(a)(i) kept, but 17(b) (act when collision
+    # cannot be avoided by the give-way ship alone) broken, so she is not compliant either
+    assert r.compliant_b is False
+    assert r.rules["b"]["17a"]["verdict"] is True and r.rules["b"]["17b"]["verdict"] is False
 
 
 def test_stand_on_altering_course_is_not_compliant():

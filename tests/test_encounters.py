@@ -11,8 +11,9 @@ import pytest
 
 from mmg_casadi.cli import main
 from mmg_casadi.scenario import with_method
-from mmg_casadi.scenario_run import run_scenario
 from mmg_casadi import encounters
+from mmg_casadi.closed_loop import build_problem
+from mmg_casadi.scenario_run import assess, run_scenario
 from studies import narrow_channel
 
 static_obstacle, colregs, conflict = (encounters.static_obstacle_cases, encounters.colregs_cases,
@@ -157,3 +158,16 @@ def test_study_cli_writes_cases_by_method(tmp_path):
     for case in m["cases"].values():
         assert set(case) == {"modified-vortex", "inverse-square"}
     assert (out / "head-on.png").exists() and (out / "head-on" / "modified-vortex" / "trajectory.npz").exists()
+
+
+def test_ship_pairs_carry_rule_verdicts_under_the_chosen_profile():
+    r = result(colregs, "crossing", "modified-vortex")
+    p = pair(r, "ship1", "ship2")
+    rules = p["rules"]
+    assert rules["profile"] == "iitm-lab"
+    assert rules["a"]["compliant_all"] is p["compliant"] and rules["b"]["compliant_all"] is p["compliant_b"]
+    assert rules["a"]["15"]["verdict"] is True and rules["a"]["quantities"]["crossed_other_course"] == "astern"
+    json.dumps(r.metrics, allow_nan=False)
+    ntnu = pair(assess(r.scenario, r.trajectory, build_problem(r.scenario).params, profile="ntnu-2023"),
+                "ship1", "ship2")
+    assert ntnu["rules"]["profile"] == "ntnu-2023" and ntnu["min_distance"] == p["min_distance"]
