@@ -82,3 +82,30 @@ def test_readme_snippet(tmp_path):
     out = r.save(tmp_path / "run")
     assert {p.name for p in out.iterdir()} >= {"metrics.json", "trajectory.npz", "trajectory.csv", "scenario.png"}
     assert re.search(r'"k_vor0": -15.0', (out / "metrics.json").read_text())
+
+
+def test_readme_parameter_table_is_the_code_table():
+    from pathlib import Path
+
+    from mmg_casadi.params import markdown_table
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    assert markdown_table() in readme
+
+
+def test_core_package_does_not_import_studies_tuning_or_cli():
+    import ast
+    from pathlib import Path
+    root = Path(mc.__file__).parent
+    offenders = []
+    for f in root.glob("*.py"):
+        if f.name == "cli.py":
+            continue
+        for node in ast.walk(ast.parse(f.read_text(encoding="utf-8"))):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                names = [("." * node.level) + (node.module or "")]
+            offenders += [(f.name, n) for n in names
+                          if n.split(".")[0] in ("studies", "tuning") or n in (".cli", "mmg_casadi.cli")]
+    assert not offenders
