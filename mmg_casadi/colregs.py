@@ -10,7 +10,9 @@ Angles used by the sectors of a :class:`ColregProfile`, both in [0, 2π):
   π dead astern;
 * relative heading ``psi_r = psi_own - psi_other``.
 
-The laboratory's sector table (``shared/data/README.md``) was written for counter-clockwise angles, where the
+The seed paper's laboratory sector table (head-on 7π/8 ≤ ψ_r < 9π/8, give-way 3π/8 ≤ ψ_r < 7π/8, stand-on
+9π/8 ≤ ψ_r < 13π/8, stern sector 112.5°–247.5° of bearing, i.e. COLREG Rule 13(b)'s "more than 22.5 degrees abaft
+her beam"; the paper's §Dynamic Obstacle Avoidance and its laboratory code) was written for counter-clockwise angles, where the
 relative heading is ψ_other − ψ_own. Our headings are clockwise (a mirror image), so the same physical relative
 heading is ψ_own − ψ_other. With this sign the paper's crossing (own ship at (0, 0) heading 0; the other at
 (25, 25), on own's starboard side, heading −90°) gives ``psi_r = π/2`` (crossing, give way) for the own ship and

@@ -68,6 +68,7 @@ from .closed_loop import ClosedLoopModel, Layout, build_problem
 from .errors import InputError
 from .io import write_json
 from .params import PARAMETERS, diff, resolve
+from .progress import progress_bar
 from .results import RUN_COLUMNS, ResultsTable, summarize
 from .sampling import ENVIRONMENTS, parse_envs, sample_scenario
 from .scenario import Scenario, dump_scenario, scenario_from_dict, with_params
@@ -651,8 +652,7 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
             prepare_layouts([layout_for(e, m, _non_default(params)) for e, m in cells], n_compile, log=log)
             bar = None
             if progress:
-                from .progress import Progress
-                bar = Progress(len(planned), desc="statistics", initial=len(done))
+                bar = progress_bar(len(planned), desc="statistics", initial=len(done))
             try:
                 for _task, rows in executor.run(tasks):
                     written = table.append(rows)

@@ -281,13 +281,13 @@ def wilson_interval(k: int, n: int, z: float = Z_95) -> tuple[float, float]:
         raise InputError("k", f"an integer in [0, {n}]", k)
     if not z > 0:
         raise InputError("z", "a number > 0", z)
+    from scipy.stats import norm
+
+    from .stats import wilson
     p = k / n
-    z2 = z * z
-    denom = 1.0 + z2 / n
-    centre = (p + z2 / (2 * n)) / denom
-    half = z / denom * math.sqrt(p * (1 - p) / n + z2 / (4 * n * n))
+    low, high = wilson(k, n, confidence=float(2 * norm.cdf(z) - 1))
     # the interval always contains p; clamp so rounding at k = 0 or k = n cannot put p outside it
-    return min(p, max(0.0, centre - half)), max(p, min(1.0, centre + half))
+    return min(p, max(0.0, low)), max(p, min(1.0, high))
 
 
 def mean_ci(values, z: float = Z_95) -> tuple[float, float, float]:

@@ -10,7 +10,6 @@ import pytest
 
 from mmg_casadi.errors import InputError
 from mmg_casadi.plot_statistics import plot_statistics
-from mmg_casadi.progress import Progress
 from mmg_casadi.results import (
     RUN_COLUMNS,
     SUMMARY_COLUMNS,
@@ -288,56 +287,6 @@ def test_summarize_rejects_rows_without_key():
 class _Tty(io.StringIO):
     def isatty(self):
         return True
-
-
-def test_progress_non_tty_prints_at_most_every_ten_percent():
-    out = io.StringIO()
-    now = [0.0]
-    with Progress(1000, desc="env 1", stream=out, clock=lambda: now[0]) as bar:
-        for _ in range(1000):
-            now[0] += 0.01
-            bar.update()
-    lines = out.getvalue().splitlines()
-    assert len(lines) == 10
-    assert lines[0].startswith("env 1  100/1000 (10.0%)  100.0 runs/s  ETA 0:00:09")
-    assert lines[-1] == "env 1  1000/1000 (100.0%)  100.0 runs/s  ETA 0:00:00"
-
-
-def test_progress_resume_counts_only_new_work():
-    out = io.StringIO()
-    now = [0.0]
-    bar = Progress(100, stream=out, initial=50, clock=lambda: now[0])
-    now[0] = 5.0
-    bar.update(10)
-    assert bar.line() == "60/100 (60.0%)  2.0 runs/s  ETA 0:00:20"
-    bar.close()
-    bar.close()
-    assert out.getvalue().count("\n") == 2
-
-
-def test_progress_tty_overwrites_line_and_throttles():
-    out = _Tty()
-    now = [0.0]
-    with Progress(10, desc="x", stream=out, min_interval=1.0, clock=lambda: now[0]) as bar:
-        for _ in range(10):
-            now[0] += 0.25
-            bar.update()
-    text = out.getvalue()
-    assert text.endswith("\n") and "\n" not in text[:-1]
-    assert text.count("\r") == 4  # t = 0.25, 1.25, 2.25 (throttled) and the last update (forced)
-    assert text.split("\r")[-1].rstrip() == "x  10/10 (100.0%)  4.0 runs/s  ETA 0:00:00"
-
-
-def test_progress_rejects_bad_input():
-    with pytest.raises(InputError):
-        Progress(-1)
-    with pytest.raises(InputError):
-        Progress(10, initial=11)
-    with pytest.raises(InputError):
-        Progress(10, stream=io.StringIO()).update(-2)
-
-
-# ---------------------------------------------------------------- figure
 
 
 def test_plot_statistics_writes_png(tmp_path):
