@@ -350,7 +350,9 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
 
     x_new = ca.vertcat(ca.if_else(running, t + dt, t), *out)
     aux_m = ca.horzcat(*aux)
-    return ca.Function(f"closed_loop_{layout.key()}", [x, p], [x_new, aux_m], ["x", "p"], ["x_next", "aux"])
+    # common-subexpression elimination: the same operations without repeats, so results are bit-identical
+    return ca.Function(f"closed_loop_{layout.key()}", [x, p], [x_new, aux_m], ["x", "p"], ["x_next", "aux"],
+                       {"cse": True})
 
 
 def build_guidance(layout: Layout, ship: ShipParams | None = None,
@@ -360,7 +362,7 @@ def build_guidance(layout: Layout, ship: ShipParams | None = None,
     x = ca.SX.sym("x", layout.nx)
     p = ca.SX.sym("p", layout.np)
     _, aux = step(x, p)
-    return ca.Function(f"guidance_{layout.key()}", [x, p], [aux[0, :]], ["x", "p"], ["delta_c"])
+    return ca.Function(f"guidance_{layout.key()}", [x, p], [aux[0, :]], ["x", "p"], ["delta_c"], {"cse": True})
 
 
 def ship_rows(layout: Layout, X: np.ndarray) -> np.ndarray:

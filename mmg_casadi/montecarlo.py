@@ -77,9 +77,11 @@ DEFAULT_METHODS: tuple[str, ...] = method_registry.PAPER_STATISTICS
 """Methods compared by the paper's statistical analysis."""
 
 BACKENDS: tuple[str, ...] = ("local", "ray")
-DEFAULT_BATCH = 32
-"""Runs per task: ≥ ~0.2 s of compiled work even for the lightest cell (environment 1, an APF)."""
-DEFAULT_CHUNK = 100
+DEFAULT_BATCH = 128
+"""Runs per task (the unit of resumption): ≥ ~1 s of compiled work even for the lightest cell; inside a task
+:func:`~mmg_casadi.simulation.simulate_batch` steps ``DEFAULT_WIDTH`` runs side by side and refills finished
+columns with waiting runs."""
+DEFAULT_CHUNK = 25
 """Steps per ``mapaccum`` chunk (the rollout stops after the chunk in which every run has finished)."""
 MAX_FAILURE_FILES = 20
 """Replayable scenario files written per (environment, method) cell."""
@@ -194,7 +196,7 @@ MIN_TIMING_COLUMNS = 256
 Python call overhead is negligible against the compiled work."""
 
 
-def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: float = 0.05,
+def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: float = 0.02,
                   max_repeats: int = 50) -> float:
     """Compiled time per guidance call per ship (µs), from the states ``X`` (nx, K) with parameters ``P``.
 
@@ -345,19 +347,39 @@ def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int =
     return tasks
 
 
-def _compile_item(item) -> str:
+def _compile_item(item) -> tuple[str, float]:
     from .simulation import compiled_guidance, compiled_step
     layout, kind = item
+    t0 = time.perf_counter()
     (compiled_step if kind == "step" else compiled_guidance)(layout)
-    return kind
+    return kind, time.perf_counter() - t0
+
+
+def _compile_cost(item) -> float:
+    """A rough order of compile time: ships × neighbours, the velocity obstacle's candidates weigh most."""
+    layout, kind = item
+    n = layout.n_ships * (layout.n_agents - 1)
+    n *= 1 + sum(m == "velocity-obstacle" for m in layout.methods) * layout.vo_candidates / 20 / layout.n_ships
+    return n * (1.0 if kind == "step" else 0.6)
 
 
 def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
     """Compile (or load from the disk cache) the step and guidance Functions of every layout, in this process.
 
-    Libraries missing from the cache are first compiled in parallel by up to ``workers`` forked processes
-    (compiling the closed loop of the velocity obstacle for 10 ships takes minutes); afterwards this process
-    loads all of them, so forked pool workers inherit them and Ray workers find them on disk.
+    Libraries missing from the cache are first compiled in parallel by up to ``workers`` forked processes, the
+    costliest first (the velocity obstacle for 10 ships takes the longest), each one named in ``log`` as it is
+    done; afterwards this process loads all of them, so forked pool workers inherit them and Ray workers find
+    them on disk. The cache is keyed by the generated C source, so a library compiled by any version of the
+    package with the same source is reused.
+
+    Parameters
+    ----------
+    layouts : iterable of Layout
+        The closed loops a study needs.
+    workers : int
+        Parallel compiler processes.
+    log : file-like, optional
+        Where to report what is compiled.
     """
     from .closed_loop import build_closed_loop_step, build_guidance
     from .compiled import library_path
@@ -370,14 +392,19 @@ def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
         if not library_path(build_guidance(lay))[0].exists():
             missing.append((lay, "guidance"))
     if missing:
+        missing.sort(key=_compile_cost, reverse=True)
         if log:
-            print(f"compiling {len(missing)} closed-loop librar{'y' if len(missing) == 1 else 'ies'} "
-                  f"(once; cached in the mmg-casadi cache)", file=log)
+            print(f"compiling {len(missing)} closed-loop librar{'y' if len(missing) == 1 else 'ies'} with "
+                  f"{min(max(1, workers), len(missing))} processes (once; cached in the mmg-casadi cache)",
+                  file=log, flush=True)
         n = min(max(1, workers), len(missing))
-        if n > 1:
-            ctx = multiprocessing.get_context("fork")
-            with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
-                list(pool.map(_compile_item, missing))
+        ctx = multiprocessing.get_context("fork")
+        with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
+            futures = {pool.submit(_compile_item, item): item for item in missing}
+            for k, fut in enumerate(as_completed(futures), 1):
+                (lay, _), (kind, seconds) = futures[fut], fut.result()
+                if log:
+                    print(f"  [{k}/{len(missing)}] {kind} {lay.key()} ({seconds:.0f} s)", file=log, flush=True)
     for lay in layouts:
         compiled_step(lay)
         compiled_guidance(lay)

@@ -133,7 +133,9 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
     Parameters
     ----------
     scenario : Scenario, str or Path
-        A scenario, or the path of a scenario TOML file (:func:`~mmg_casadi.scenario.load_scenario`).
+        A scenario, or the path of a scenario TOML file (:func:`~mmg_casadi.scenario.load_scenario`); a file
+        name that does not exist but names a shipped scenario (``"head_on.toml"``) loads that one
+        (:func:`packaged_scenario`).
     params : dict, optional
         Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`); they win over the scenario's
         ``[settings]``.
@@ -153,12 +155,23 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
     >>> r.metrics["params"]["t_max"], r.metrics["ships"][0]["status"]
     (5.0, 'timeout')
     """
-    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    if isinstance(scenario, Scenario):
+        sc = scenario
+    else:
+        path = Path(scenario)
+        shipped = path.suffix == ".toml" and path.parent == Path(".") and not path.exists()
+        sc = packaged_scenario(path.stem) if shipped and path.stem in _packaged_names() else load_scenario(path)
     if method is not None:
         sc = with_method(sc, method)
     problem = build_problem(sc, params)
     traj = simulate(problem.layout, problem.x0, problem.p)
     return assess(sc, traj, problem.params, profile=profile)
+
+
+def _packaged_names() -> list[str]:
+    from importlib import resources
+    return sorted(p.name[:-5] for p in resources.files("mmg_casadi").joinpath("data", "scenarios").iterdir()
+                  if p.name.endswith(".toml"))
 
 
 def packaged_scenario(name: str) -> Scenario:
@@ -176,8 +189,7 @@ def packaged_scenario(name: str) -> Scenario:
     ['ship1', 'ship2']
     """
     from importlib import resources
-    names = sorted(p.name[:-5] for p in resources.files("mmg_casadi").joinpath("data", "scenarios").iterdir()
-                   if p.name.endswith(".toml"))
+    names = _packaged_names()
     if name not in names:
         raise InputError("scenario", f"one of: {', '.join(names)}", name)
     return load_scenario(resources.files("mmg_casadi").joinpath("data", "scenarios", f"{name}.toml"))

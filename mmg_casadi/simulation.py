@@ -191,20 +191,64 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200)
     return Trajectory(layout, X[0].copy(), states, A)
 
 
-def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int = 100) -> tuple[np.ndarray, float]:
-    """Roll out ``M`` scenarios of one layout together (columns of ``X0`` (nx, M) and ``P`` (np, M)).
+DEFAULT_WIDTH = 32
+"""Scenarios stepped side by side by :func:`simulate_batch` (columns of one compiled ``map``)."""
 
-    Returns the final scenario states ``(nx, M)`` and the wall time spent in compiled code (s).
+
+def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int = 100,
+                   width: int | None = DEFAULT_WIDTH) -> tuple[np.ndarray, float]:
+    """Roll out ``M`` scenarios of one layout (columns of ``X0`` (nx, M) and ``P`` (np, M)) to their ends.
+
+    At most ``width`` scenarios are stepped side by side, ``chunk`` steps per compiled call; after every call the
+    scenarios that finished leave the batch and waiting ones take their columns (when none wait, the batch
+    shrinks), so no compiled work is spent on finished scenarios beyond the chunk in which they finished.
+    Every column is computed independently, so the final states do not depend on ``width`` or ``chunk``.
+
+    Parameters
+    ----------
+    layout : Layout
+        Shape of the closed loop shared by all scenarios.
+    X0 : ndarray (nx, M)
+        Initial scenario states.
+    P : ndarray (np, M)
+        Parameter vectors (each column its own horizon ``t_max``).
+    chunk : int
+        Steps per compiled call.
+    width : int, optional
+        Scenarios stepped together (``None``: all ``M``).
+
+    Returns
+    -------
+    tuple
+        Final scenario states ``(nx, M)`` and the wall time spent in compiled code (s).
     """
     X0 = np.asarray(X0, float)
     P = np.asarray(P, float)
     M = X0.shape[1]
-    F = _chunk_final(layout, chunk, M)
-    t_max = P[GLOBAL_PARAMS.index("t_max")]
-    x = X0
+    width = M if width is None else max(1, min(int(width), M))
+    t_row = GLOBAL_PARAMS.index("t_max")
+    out = X0.copy()
+    active = [j for j in range(M) if not _finished(layout, X0[:, j:j + 1], P[t_row, j])[0]]
+    pending = active[width:]
+    active = active[:width]
+    x, p = X0[:, active], P[:, active]
     busy = 0.0
-    while not np.all(_finished(layout, x, t_max)):
+    while active:
+        F = _chunk_final(layout, chunk, len(active))
         t0 = time.perf_counter()
-        x = np.array(F(x, P))
+        x = np.array(F(x, p))
         busy += time.perf_counter() - t0
-    return x, busy
+        done = _finished(layout, x, p[t_row])
+        if not done.any():
+            continue
+        out[:, [active[k] for k in np.flatnonzero(done)]] = x[:, done]
+        keep = np.flatnonzero(~done)
+        active = [active[k] for k in keep]
+        x, p = x[:, keep], p[:, keep]
+        n_new = min(len(pending), width - len(active))
+        if n_new:
+            new, pending = pending[:n_new], pending[n_new:]
+            active += new
+            x = np.hstack([x, X0[:, new]])
+            p = np.hstack([p, P[:, new]])
+    return out, busy

@@ -68,9 +68,10 @@ def test_parser_finds_parameters_and_detects_a_missing_one():
     assert [x for x in _arguments(f) if x not in _documented(f.__doc__)] == ["c"]
 
 
-def test_readme_snippet(tmp_path):
-    scenario = mc.packaged_scenario("head_on")
-    r = mc.run_scenario(scenario, params={"k_vor0": -15.0, "t_max": 30.0})
+def test_readme_snippet(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # "head_on.toml" is not a file here: the shipped scenario of that name is used
+    r = mc.run_scenario("head_on.toml", params={"k_vor0": -15.0, "t_max": 30.0})
+    assert r.scenario == mc.packaged_scenario("head_on")
     assert r.metrics["params"]["k_vor0"] == -15.0 and r.params["r_safe"] == 15.0
     frame = r.to_frame()
     assert list(frame.index) == ["ship1", "ship2"] and "mcte" in frame.columns
