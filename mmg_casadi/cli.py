@@ -164,15 +164,18 @@ def _tune(a) -> dict:
 
 
 def main(argv=None) -> int:
+    from .signals import exit_status, signal_name, terminate_as_interrupt
     try:
-        a = build_parser().parse_args(argv)
-        result = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune}[a.command](a)
+        with terminate_as_interrupt():
+            a = build_parser().parse_args(argv)
+            result = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune}[a.command](a)
     except InputError as e:
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("mmg-casadi: interrupted (finished results are kept; rerun to resume)", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as e:
+        print(f"mmg-casadi: interrupted by {signal_name(e)} (finished results are kept; rerun the same command "
+              "to resume)", file=sys.stderr)
+        return exit_status(e)
     if isinstance(result, dict) and a.command == "maneuver":
         print(json.dumps({k: v for k, v in result.items() if not isinstance(v, dict)}, indent=1))
     return 0

@@ -69,6 +69,7 @@ from .results import METRICS, RUN_COLUMNS, ResultsTable, summarize
 from .sampling import ENVIRONMENTS, parse_envs, sample_scenario
 from .scenario import Scenario, dump_scenario, scenario_from_dict
 from .scenario_run import STALL_WINDOW, build_problem
+from .signals import keep_termination_handlers, worker_initializer
 
 DEFAULT_METHODS: tuple[str, ...] = ("modified-vortex", "inverse-square", "velocity-obstacle")
 """Methods compared by the paper's statistical analysis."""
@@ -376,7 +377,8 @@ def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
         n = min(max(1, workers), len(missing))
         if n > 1:
             ctx = multiprocessing.get_context("fork")
-            with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
+            with ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=worker_initializer,
+                                     initargs=(os.getpid(),)) as pool:
                 list(pool.map(_compile_item, missing))
     for lay in layouts:
         compiled_step(lay)
@@ -393,8 +395,17 @@ def _check_workers(field: str, value):
     return int(value)
 
 
+WORKER_JOIN_TIMEOUT = 5.0
+"""Seconds to wait for each terminated pool worker to exit when a study is interrupted."""
+RAY_MAX_RETRIES = 3
+"""Times Ray reruns a batch whose worker process died (its rows are appended once: appends skip stored keys)."""
+
+
 class LocalExecutor:
     """Run batches in a local process pool (``fork``), one batch per task.
+
+    Workers run :func:`~mmg_casadi.signals.worker_initializer`: SIGTERM stops them at once and they die with
+    the study process, also when it is killed with SIGKILL.
 
     Parameters
     ----------
@@ -418,7 +429,8 @@ class LocalExecutor:
                 yield t, _run_task(t)
             return
         ctx = multiprocessing.get_context("fork")
-        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)), mp_context=ctx)
+        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)), mp_context=ctx,
+                                   initializer=worker_initializer, initargs=(os.getpid(),))
         try:
             futures = {pool.submit(_run_task, t): t for t in tasks}
             for fut in as_completed(futures):
@@ -431,6 +443,8 @@ class LocalExecutor:
             for proc in processes:
                 if proc.is_alive():
                     proc.terminate()
+            for proc in processes:
+                proc.join(WORKER_JOIN_TIMEOUT)
             raise
         pool.shutdown()
 
@@ -450,7 +464,10 @@ class RayExecutor:
     ``ray.init(address=address, num_cpus=num_cpus)`` is called if Ray is not initialised yet (and
     ``ray.shutdown()`` on :meth:`close` in that case); ``num_cpus`` only applies to a new local cluster.
     ``$MMG_CASADI_CACHE`` is forwarded to the workers, which load the compiled steps from that cache (on a
-    multi-machine cluster, point it at a shared directory or let each machine compile once).
+    multi-machine cluster, point it at a shared directory or let each machine compile once). A batch whose
+    worker dies is rerun up to :data:`RAY_MAX_RETRIES` times (a batch that raises is not); each batch result
+    is yielded once and :meth:`ResultsTable.append <mmg_casadi.results.ResultsTable.append>` skips stored
+    keys, so no run is lost or counted twice.
     """
 
     def __init__(self, address: str | None = None, num_cpus: int | None = None):
@@ -477,7 +494,8 @@ class RayExecutor:
             kw["num_cpus"] = self.num_cpus
         if renv:
             kw["runtime_env"] = renv
-        ray.init(**kw)
+        with keep_termination_handlers():  # SIGTERM keeps the CLI's resume path
+            ray.init(**kw)
         self._owns = True
         return {}
 
@@ -495,7 +513,7 @@ class RayExecutor:
         if not tasks:
             return
         opts = self._ensure()
-        remote = ray.remote(num_cpus=1)(_run_task)
+        remote = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES, retry_exceptions=False)(_run_task)
         if opts:
             remote = remote.options(**opts)
         refs = {remote.remote(t): t for t in tasks}
@@ -506,7 +524,9 @@ class RayExecutor:
                 for ref in ready:
                     yield refs[ref], ray.get(ref)
         finally:
-            for ref in pending:
+            # a Ray this executor started is shut down by close(), which stops its tasks; cancelling them here
+            # as well can race with a task completing and abort the driver (Ray 2.60 task_manager check)
+            for ref in (() if self._owns else pending):
                 try:
                     ray.cancel(ref, force=True)
                 except Exception:  # noqa: BLE001 - best effort on interruption
