@@ -69,7 +69,8 @@ def _json_default(o):
 
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="mmg-casadi", description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="{maneuver,simulate,study,tune}")
+    sub = p.add_subparsers(dest="command", parser_class=_Parser,
+                           metavar="{maneuver,simulate,study,tune,convert}")
     sub.required = True
 
     m = sub.add_parser("maneuver", help="standard manoeuvres: turning circle, zig-zag")
@@ -81,7 +82,7 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--out", type=Path, required=True, help="output directory")
 
     s = sub.add_parser("simulate", help="run a scenario file")
-    s.add_argument("file", type=Path, help="scenario TOML file")
+    s.add_argument("file", type=Path, help="scenario TOML file or maritime-schema traffic situation (.json)")
     s.add_argument("--method", help="override settings.method")
     s.add_argument("--params", type=Path, help="TOML file of field parameters (e.g. from `tune apf`)")
     s.add_argument("--out", type=Path, required=True)
@@ -110,6 +111,15 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--train", type=int, default=8)
     t.add_argument("--holdout", type=int, default=40)
     t.add_argument("--out", type=Path, required=True)
+
+    c = sub.add_parser("convert", help="maritime-schema traffic situation (.json) <-> scenario file (.toml)")
+    c.add_argument("file", type=Path, help="input .json (maritime-schema) or .toml (scenario)")
+    c.add_argument("--out", type=Path, required=True, help="output .toml or .json")
+    c.add_argument("--method", default="modified-vortex", help="json->toml: the own ship's method")
+    c.add_argument("--target-method", default="none", help="json->toml: the target ships' method")
+    c.add_argument("--length-scale", default="kcs", help="json->toml: kcs (230 m) | own-ship")
+    c.add_argument("--reference", default=None,
+                   help="toml->json: LAT,LON of the scenario origin [deg] (default: from the file's header)")
     return p
 
 
@@ -132,7 +142,11 @@ def _maneuver(a) -> dict:
 def _simulate(a) -> dict:
     from .scenario import load_scenario, with_method
     from .scenario_run import load_params_file, run_scenario, write_outputs
-    sc = load_scenario(a.file)
+    if a.file.suffix.lower() == ".json":
+        from .interchange import load_traffic_situation
+        sc = load_traffic_situation(a.file)[0]
+    else:
+        sc = load_scenario(a.file)
     if a.method:
         sc = with_method(sc, a.method)
     params = load_params_file(a.params) if a.params else None
@@ -163,12 +177,19 @@ def _tune(a) -> dict:
     return importlib.import_module(f"tuning.cli_{a.what}").run(a)
 
 
+def _convert(a) -> dict:
+    from .interchange import convert_file
+    return convert_file(a.file, a.out, method=a.method, target_method=a.target_method,
+                        length_scale=a.length_scale, reference=a.reference)
+
+
 def main(argv=None) -> int:
     from .signals import exit_status, signal_name, terminate_as_interrupt
     try:
         with terminate_as_interrupt():
             a = build_parser().parse_args(argv)
-            result = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune}[a.command](a)
+            result = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
+                      "convert": _convert}[a.command](a)
     except InputError as e:
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
         return 2
