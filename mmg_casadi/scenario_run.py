@@ -38,25 +38,37 @@ STALL_WINDOW = 50.0  #: no progress towards the goal for this long at t_max → 
 
 def load_params_file(path) -> dict:
     """Field / guidance parameters from a TOML file (top level or a ``[params]`` table), e.g. from ``tune apf``."""
+    from .scenario import VO_CANDIDATES_MAX, VO_CONES, _is_number, toml_key
     path = Path(path)
     try:
-        raw = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError("--params", "an existing TOML file", str(path)) from None
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as e:
+        raise InputError("--params", "an existing, readable TOML file", f"{path} ({e.strerror or e})") from None
+    except UnicodeDecodeError:
+        raise InputError("--params", "a UTF-8 text file", str(path)) from None
     except tomllib.TOMLDecodeError as e:
         raise InputError("--params", f"valid TOML ({e})", str(path)) from None
     raw = raw.get("params", raw)
+    if not isinstance(raw, dict):
+        raise InputError("params", "a table of field parameters", raw)
     allowed = set(PARAM_KEYS) | {"gamma_max_deg", "r_safe", "stall_window"} | set(LAYOUT_KEYS)
     out = {}
     for k, v in raw.items():
+        field = f"params.{toml_key(k)}"
         if k not in allowed:
-            raise InputError(f"params.{k}", f"one of: {', '.join(sorted(allowed))}", k)
+            raise InputError(field, f"one of: {', '.join(sorted(allowed))}", k)
         if k == "vo_cone":
+            if v not in VO_CONES:
+                raise InputError(field, f"one of: {', '.join(VO_CONES)}", v)
             out[k] = v
-            continue
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise InputError(f"params.{k}", "a number", v)
-        out[k] = float(v)
+        elif k == "vo_candidates":
+            if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= VO_CANDIDATES_MAX:
+                raise InputError(field, f"an integer in [1, {VO_CANDIDATES_MAX}]", v)
+            out[k] = v
+        elif not _is_number(v):
+            raise InputError(field, "a finite number", v)
+        else:
+            out[k] = float(v)
     return out
 
 
