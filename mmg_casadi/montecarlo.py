@@ -69,7 +69,7 @@ from .results import METRICS, RUN_COLUMNS, ResultsTable, summarize
 from .sampling import ENVIRONMENTS, parse_envs, sample_scenario
 from .scenario import Scenario, dump_scenario, scenario_from_dict
 from .scenario_run import STALL_WINDOW, build_problem
-from .signals import keep_termination_handlers, worker_initializer
+from .signals import keep_termination_handlers, stop_pool, worker_initializer
 
 DEFAULT_METHODS: tuple[str, ...] = ("modified-vortex", "inverse-square", "velocity-obstacle")
 """Methods compared by the paper's statistical analysis."""
@@ -377,9 +377,14 @@ def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
         n = min(max(1, workers), len(missing))
         if n > 1:
             ctx = multiprocessing.get_context("fork")
-            with ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=worker_initializer,
-                                     initargs=(os.getpid(),)) as pool:
+            pool = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=worker_initializer,
+                                       initargs=(os.getpid(),))
+            try:
                 list(pool.map(_compile_item, missing))
+            except BaseException:
+                stop_pool(pool, WORKER_JOIN_TIMEOUT)  # do not wait minutes for compilers on Ctrl-C / SIGTERM
+                raise
+            pool.shutdown()
     for lay in layouts:
         compiled_step(lay)
         compiled_guidance(lay)
@@ -436,15 +441,9 @@ class LocalExecutor:
             for fut in as_completed(futures):
                 yield futures[fut], fut.result()
         except BaseException:
-            # interrupted (Ctrl-C, an error, or the consumer stopped): drop queued batches and stop the
-            # running ones at once; their rows were never appended, so a rerun simulates them again
-            processes = list((getattr(pool, "_processes", None) or {}).values())
-            pool.shutdown(wait=False, cancel_futures=True)
-            for proc in processes:
-                if proc.is_alive():
-                    proc.terminate()
-            for proc in processes:
-                proc.join(WORKER_JOIN_TIMEOUT)
+            # interrupted (Ctrl-C, SIGTERM, an error, or the consumer stopped): drop queued batches and stop
+            # the running ones at once; their rows were never appended, so a rerun simulates them again
+            stop_pool(pool, WORKER_JOIN_TIMEOUT)
             raise
         pool.shutdown()
 

@@ -10,6 +10,7 @@
   only raise an exception inside the running task) and makes the worker die with its parent, also when the
   parent is killed with SIGKILL and can run no cleanup: on Linux through ``prctl(PR_SET_PDEATHSIG, SIGTERM)``
   (``man 2 prctl``), elsewhere by a daemon thread that polls ``os.getppid()``.
+* :func:`stop_pool` — stop a process pool at once (interruption), without waiting for running tasks.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import os
 import signal
 import sys
 import threading
+import time
 
 TERMINATION_SIGNALS: tuple[int, ...] = (signal.SIGTERM, signal.SIGHUP)
 """Signals handled like Ctrl-C by :func:`terminate_as_interrupt`."""
@@ -145,10 +147,9 @@ def _set_parent_death_signal(signum: int) -> bool:
 
 def _watch_parent(parent_pid: int, interval: float) -> None:
     """Exit this process as soon as its parent is no longer ``parent_pid`` (re-parented after its death)."""
-    stop = threading.Event()
-    while not stop.wait(interval):
-        if os.getppid() != parent_pid:
-            os._exit(128 + signal.SIGTERM)
+    while os.getppid() == parent_pid:
+        time.sleep(interval)
+    os._exit(128 + signal.SIGTERM)
 
 
 def worker_initializer(parent_pid: int) -> None:
@@ -173,3 +174,26 @@ def worker_initializer(parent_pid: int) -> None:
                          name="parent-watch").start()
     if os.getppid() != parent_pid:
         os._exit(128 + signal.SIGTERM)
+
+
+def stop_pool(pool, timeout: float = 5.0) -> None:
+    """Stop a ``concurrent.futures.ProcessPoolExecutor`` at once: drop queued tasks, terminate its workers
+    (SIGTERM; with :func:`worker_initializer` they exit immediately) and reap them (``timeout`` s each).
+
+    Examples
+    --------
+    >>> from concurrent.futures import ProcessPoolExecutor
+    >>> import multiprocessing
+    >>> pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"),
+    ...                            initializer=worker_initializer, initargs=(os.getpid(),))
+    >>> fut = pool.submit(time.sleep, 60)
+    >>> t0 = time.monotonic(); stop_pool(pool); time.monotonic() - t0 < 5
+    True
+    """
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in processes:
+        proc.join(timeout)

@@ -227,3 +227,34 @@ def test_sigterm_mid_ray_study_exits_143_without_orphans(tmp_path, cli):
     assert proc.returncode == 143, stderr
     assert "SIGTERM" in stderr.strip().splitlines()[-1]
     assert _wait_gone(proc.pid, 10.0) == []
+
+
+def _group_commands(pgid: int) -> list[str]:
+    out = []
+    for pid in _live_group_members(pgid):
+        try:
+            out.append(Path(f"/proc/{pid}/comm").read_text().strip())
+        except OSError:
+            pass
+    return out
+
+
+@pytest.mark.slow
+def test_sigterm_during_the_first_compile_does_not_wait_for_the_compiler(tmp_path, cli, monkeypatch):
+    # a fresh cache: the study first compiles its closed loop in a process pool (tens of seconds for the
+    # velocity obstacle); SIGTERM must stop the pool at once instead of waiting for the compile to finish
+    monkeypatch.setenv("MMG_CASADI_CACHE", str(tmp_path / "cache"))
+    study = ["study", "statistics", "--runs", "1", "--envs", "1", "--methods", "velocity-obstacle",
+             "--workers", "2", "--out", str(tmp_path / "out")]
+    proc = cli(study)
+    t0 = time.monotonic()
+    while "cc1" not in _group_commands(proc.pid):
+        assert proc.poll() is None and time.monotonic() - t0 < 300, "no compiler started"
+        time.sleep(0.05)
+    t_signal = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    _o, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 143, stderr
+    assert time.monotonic() - t_signal < 10.0
+    # the pool workers are gone; the C compilers they started finish their file on their own
+    assert not [c for c in _group_commands(proc.pid) if c.startswith("python")]
