@@ -262,6 +262,7 @@ def _params_property(text, tmp):
     except InputError as err:
         _check_error(err)
         return None
+    event("accepted")
     return params
 
 
