@@ -88,7 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``mmg-casadi`` argument parser (one sub-parser per command, study and tuning)."""
     p = _Parser(prog="mmg-casadi", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", parser_class=_Parser,
-                           metavar="{maneuver,simulate,study,tune,params}")
+                           metavar="{maneuver,simulate,study,tune,convert,params}")
     sub.required = True
 
     m = sub.add_parser("maneuver", help="standard manoeuvres: turning circle, zig-zag")
@@ -100,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--out", type=Path, required=True, help="output directory")
 
     s = sub.add_parser("simulate", help="run a scenario file")
-    s.add_argument("file", type=Path, help="scenario TOML file")
+    s.add_argument("file", type=Path, help="scenario TOML file or maritime-schema traffic situation (.json)")
     s.add_argument("--method", help=f"override settings.method: {', '.join(registry.NAMES)}")
     _add_params(s)
     s.add_argument("--out", type=Path, required=True, help="output directory")
@@ -140,6 +140,15 @@ def build_parser() -> argparse.ArgumentParser:
     _add_params(ta)
     ta.add_argument("--out", type=Path, required=True, help="output directory")
 
+    c = sub.add_parser("convert", help="maritime-schema traffic situation (.json) <-> scenario file (.toml)")
+    c.add_argument("file", type=Path, help="input .json (maritime-schema) or .toml (scenario)")
+    c.add_argument("--out", type=Path, required=True, help="output .toml or .json")
+    c.add_argument("--method", default="modified-vortex", help="json->toml: the own ship's method")
+    c.add_argument("--target-method", default="none", help="json->toml: the target ships' method")
+    c.add_argument("--length-scale", default="kcs", help="json->toml: kcs (230 m) | own-ship")
+    c.add_argument("--reference", default=None,
+                   help="toml->json: LAT,LON of the scenario origin [deg] (default: from the file's header)")
+
     pp = sub.add_parser("params", help="list every parameter (default, allowed values, unit, meaning, source)")
     pp.add_argument("--markdown", action="store_true", help="as a Markdown table")
     return p
@@ -175,7 +184,11 @@ def _maneuver(a) -> dict:
 def _simulate(a) -> dict:
     from .scenario import load_scenario, with_method
     from .scenario_run import run_scenario
-    sc = load_scenario(a.file)
+    if a.file.suffix.lower() == ".json":
+        from .interchange import load_traffic_situation
+        sc = load_traffic_situation(a.file)[0]
+    else:
+        sc = load_scenario(a.file)
     if a.method:
         sc = with_method(sc, a.method)
     res = run_scenario(sc, params=_params_of(a))
@@ -210,6 +223,12 @@ def _tune(a) -> dict:
     return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a))
 
 
+def _convert(a) -> dict:
+    from .interchange import convert_file
+    return convert_file(a.file, a.out, method=a.method, target_method=a.target_method,
+                        length_scale=a.length_scale, reference=a.reference)
+
+
 def _params(a) -> dict:
     print(markdown_table() if a.markdown else help_text())
     return {n: p.default for n, p in PARAMETERS.items()}
@@ -225,17 +244,19 @@ def _flag(field: str, a) -> str:
 
 def main(argv=None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    from .signals import exit_status, signal_name, terminate_as_interrupt
     parser = build_parser()
     a = None
     try:
-        a, extra = parser.parse_known_args(argv)
-        if extra:
-            prog = "mmg-casadi " + " ".join(x for x in (a.command, getattr(a, "study", None),
-                                                         getattr(a, "what", None)) if x)
-            raise InputError(extra[0], f"an option of '{prog}' (see '{prog} --help')")
-        handlers = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
-                    "params": _params}
-        handlers[a.command](a)
+        with terminate_as_interrupt():
+            a, extra = parser.parse_known_args(argv)
+            if extra:
+                prog = "mmg-casadi " + " ".join(x for x in (a.command, getattr(a, "study", None),
+                                                             getattr(a, "what", None)) if x)
+                raise InputError(extra[0], f"an option of '{prog}' (see '{prog} --help')")
+            handlers = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
+                        "convert": _convert, "params": _params}
+            handlers[a.command](a)
     except _CliError as e:
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
         return 2
@@ -244,9 +265,10 @@ def main(argv=None) -> int:
             e = InputError(_flag(e.field, a), e.allowed, e.got)
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("mmg-casadi: interrupted (finished results are kept; rerun to resume)", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as e:
+        print(f"mmg-casadi: interrupted by {signal_name(e)} (finished results are kept; rerun the same command "
+              "to resume)", file=sys.stderr)
+        return exit_status(e)
     return 0
 
 

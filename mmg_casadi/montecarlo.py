@@ -72,6 +72,7 @@ from .progress import progress_bar
 from .results import RUN_COLUMNS, ResultsTable, summarize
 from .sampling import ENVIRONMENTS, parse_envs, sample_scenario
 from .scenario import Scenario, dump_scenario, scenario_from_dict, with_params
+from .signals import keep_termination_handlers, stop_pool, worker_initializer
 
 DEFAULT_METHODS: tuple[str, ...] = method_registry.PAPER_STATISTICS
 """Methods compared by the paper's statistical analysis."""
@@ -399,12 +400,18 @@ def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
                   file=log, flush=True)
         n = min(max(1, workers), len(missing))
         ctx = multiprocessing.get_context("fork")
-        with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
+        pool = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=worker_initializer,
+                                   initargs=(os.getpid(),))
+        try:
             futures = {pool.submit(_compile_item, item): item for item in missing}
             for k, fut in enumerate(as_completed(futures), 1):
                 (lay, _), (kind, seconds) = futures[fut], fut.result()
                 if log:
                     print(f"  [{k}/{len(missing)}] {kind} {lay.key()} ({seconds:.0f} s)", file=log, flush=True)
+        except BaseException:
+            stop_pool(pool, WORKER_JOIN_TIMEOUT)  # do not wait minutes for compilers on Ctrl-C / SIGTERM
+            raise
+        pool.shutdown()
     for lay in layouts:
         compiled_step(lay)
         compiled_guidance(lay)
@@ -420,8 +427,17 @@ def _check_workers(field: str, value):
     return int(value)
 
 
+WORKER_JOIN_TIMEOUT = 5.0
+"""Seconds to wait for each terminated pool worker to exit when a study is interrupted."""
+RAY_MAX_RETRIES = 3
+"""Times Ray reruns a batch whose worker process died (its rows are appended once: appends skip stored keys)."""
+
+
 class LocalExecutor:
     """Run batches in a local process pool (``fork``), one batch per task.
+
+    Workers run :func:`~mmg_casadi.signals.worker_initializer`: SIGTERM stops them at once and they die with
+    the study process, also when it is killed with SIGKILL.
 
     Parameters
     ----------
@@ -445,19 +461,16 @@ class LocalExecutor:
                 yield t, _run_task(t)
             return
         ctx = multiprocessing.get_context("fork")
-        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)), mp_context=ctx)
+        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)), mp_context=ctx,
+                                   initializer=worker_initializer, initargs=(os.getpid(),))
         try:
             futures = {pool.submit(_run_task, t): t for t in tasks}
             for fut in as_completed(futures):
                 yield futures[fut], fut.result()
         except BaseException:
-            # interrupted (Ctrl-C, an error, or the consumer stopped): drop queued batches and stop the
-            # running ones at once; their rows were never appended, so a rerun simulates them again
-            processes = list((getattr(pool, "_processes", None) or {}).values())
-            pool.shutdown(wait=False, cancel_futures=True)
-            for proc in processes:
-                if proc.is_alive():
-                    proc.terminate()
+            # interrupted (Ctrl-C, SIGTERM, an error, or the consumer stopped): drop queued batches and stop
+            # the running ones at once; their rows were never appended, so a rerun simulates them again
+            stop_pool(pool, WORKER_JOIN_TIMEOUT)
             raise
         pool.shutdown()
 
@@ -477,7 +490,10 @@ class RayExecutor:
     ``ray.init(address=address, num_cpus=num_cpus)`` is called if Ray is not initialised yet (and
     ``ray.shutdown()`` on :meth:`close` in that case); ``num_cpus`` only applies to a new local cluster.
     ``$MMG_CASADI_CACHE`` is forwarded to the workers, which load the compiled steps from that cache (on a
-    multi-machine cluster, point it at a shared directory or let each machine compile once).
+    multi-machine cluster, point it at a shared directory or let each machine compile once). A batch whose
+    worker dies is rerun up to :data:`RAY_MAX_RETRIES` times (a batch that raises is not); each batch result
+    is yielded once and :meth:`ResultsTable.append <mmg_casadi.results.ResultsTable.append>` skips stored
+    keys, so no run is lost or counted twice.
     """
 
     def __init__(self, address: str | None = None, num_cpus: int | None = None):
@@ -504,7 +520,8 @@ class RayExecutor:
             kw["num_cpus"] = self.num_cpus
         if renv:
             kw["runtime_env"] = renv
-        ray.init(**kw)
+        with keep_termination_handlers():  # SIGTERM keeps the CLI's resume path
+            ray.init(**kw)
         self._owns = True
         return {}
 
@@ -522,7 +539,7 @@ class RayExecutor:
         if not tasks:
             return
         opts = self._ensure()
-        remote = ray.remote(num_cpus=1)(_run_task)
+        remote = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES, retry_exceptions=False)(_run_task)
         if opts:
             remote = remote.options(**opts)
         refs = {remote.remote(t): t for t in tasks}
@@ -533,7 +550,9 @@ class RayExecutor:
                 for ref in ready:
                     yield refs[ref], ray.get(ref)
         finally:
-            for ref in pending:
+            # a Ray this executor started is shut down by close(), which stops its tasks; cancelling them here
+            # as well can race with a task completing and abort the driver (Ray 2.60 task_manager check)
+            for ref in (() if self._owns else pending):
                 try:
                     ray.cancel(ref, force=True)
                 except Exception:  # noqa: BLE001 - best effort on interruption

@@ -92,7 +92,7 @@ class Param:
         if self.kind == "choice":
             return f"one of: {', '.join(self.choices)}"
         if self.kind == "int":
-            return f"an integer >= {self.low:g}"
+            return f"an integer >= {self.low:g}" if self.high is None else f"an integer in [{self.low:g}, {self.high:g}]"
         try:
             check_range(self.name, math.nan, self.low, self.high, low_open=self.low_open,
                         high_open=self.high_open, unit=self.unit)
@@ -118,7 +118,8 @@ class Param:
                 raise cls(field, self.allowed(), value)
             return value
         if self.kind == "int":
-            if isinstance(value, bool) or not isinstance(value, int) or value < self.low:
+            if (isinstance(value, bool) or not isinstance(value, int) or value < self.low
+                    or (self.high is not None and value > self.high)):
                 raise cls(field, self.allowed(), value)
             return int(value)
         if not _is_real(value) or not math.isfinite(value):
@@ -180,8 +181,9 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("wall_d_act", 2.0, 0.0, None, "L", "perpendicular distance below which a wall acts",
        "paper §Narrow Waterways", "walls", low_open=True),
     # velocity obstacle
-    _P("vo_candidates", 80, 1, None, "", "candidate headings of the velocity obstacle (at the current speed)",
-       "our choice: 4.5° resolution", "velocity-obstacle", kind="int", structural=True),
+    _P("vo_candidates", 80, 1, 720, "", "candidate headings of the velocity obstacle (at the current speed)",
+       "our choice: 4.5° resolution (at most 0.5°: the compiled loop grows with the count)", "velocity-obstacle",
+       kind="int", structural=True),
     _P("vo_cone", "wide", None, None, "", "cone half-angle: 'huang' asin(D/d) (Huang et al. 2018) or 'wide' "
        "2·atan(D/d)", "laboratory's later version ('wide')", "velocity-obstacle", kind="choice",
        choices=("huang", "wide"), structural=True),
@@ -358,4 +360,11 @@ def load_file(path) -> dict:
             raise ParameterError("params file", "either parameters at the top level or one [params] table",
                                  str(path))
         raw = raw["params"]
-    return {k: check_value(k, v, field=f"params.{k}") for k, v in raw.items()}
+    return {k: check_value(k, v, field=f"params.{_key(k)}") for k, v in raw.items()}
+
+
+def _key(k: str) -> str:
+    """A TOML key as written in a file: bare if it can be, else quoted (one line, never empty)."""
+    import json
+    import re
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else json.dumps(k)

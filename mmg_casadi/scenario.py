@@ -35,6 +35,7 @@ Every malformed entry raises one :class:`~mmg_casadi.errors.ScenarioError` whose
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -229,13 +230,27 @@ class Scenario:
         return self.settings.method if own is None else own
 
 
+def toml_key(k: str) -> str:
+    r"""``k`` as written in a dotted TOML key: bare if it may be, else a quoted string (so it fits on one line).
+
+    Examples
+    --------
+    >>> toml_key("speed"), toml_key(""), toml_key("a\nb")
+    ('speed', '""', '"a\\nb"')
+    """
+    if k and all(c.isascii() and (c.isalnum() or c in "_-") for c in k):
+        return k
+    return json.dumps(k)
+
+
 def _table(value, key: str, allowed_keys) -> dict:
     """``value`` as a table whose keys all lie in ``allowed_keys`` (``key`` is its dotted name, "" for the root)."""
     if not isinstance(value, dict):
         raise ScenarioError(key or "scenario", "a table", value)
     for k in value:
         if k not in allowed_keys:
-            raise ScenarioError(f"{key}.{k}" if key else k, f"a known key (one of: {', '.join(allowed_keys)})")
+            name = toml_key(k)
+            raise ScenarioError(f"{key}.{name}" if key else name, f"a known key (one of: {', '.join(allowed_keys)})")
     return value
 
 
@@ -261,8 +276,13 @@ def _required(d: dict, key: str, prefix: str, allowed: str):
 
 
 def _is_number(value) -> bool:
-    """True for a finite int or float (not a bool)."""
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    """True for a finite int or float (not a bool; an int too large for a float is not finite)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
 
 
 def _number(value, key: str, allowed: str = "a finite number") -> float:

@@ -1,0 +1,199 @@
+"""Termination signals handled like Ctrl-C, and worker processes that never outlive the study process.
+
+* :func:`terminate_as_interrupt` — while active, SIGTERM (sent by ``timeout``, batch schedulers, ``docker stop``)
+  and SIGHUP (the terminal went away) raise :class:`Terminated`, a :class:`KeyboardInterrupt`, in the main
+  thread, so they take exactly the path of Ctrl-C: running batches are stopped, finished rows stay in
+  ``runs.csv`` and the CLI prints one line saying how to resume. :func:`exit_status` gives the conventional
+  status ``128 + signal`` (130 for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP).
+* :func:`worker_initializer` — the ``initializer`` of a forked process pool: it restores the default action of
+  SIGTERM/SIGHUP in the worker (a fork inherits the parent's Python handlers, with which ``terminate()`` would
+  only raise an exception inside the running task) and makes the worker die with its parent, also when the
+  parent is killed with SIGKILL and can run no cleanup: on Linux through ``prctl(PR_SET_PDEATHSIG, SIGTERM)``
+  (``man 2 prctl``), elsewhere by a daemon thread that polls ``os.getppid()``.
+* :func:`stop_pool` — stop a process pool at once (interruption), without waiting for running tasks.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import ctypes.util
+import os
+import signal
+import sys
+import threading
+import time
+
+TERMINATION_SIGNALS: tuple[int, ...] = (signal.SIGTERM, signal.SIGHUP)
+"""Signals handled like Ctrl-C by :func:`terminate_as_interrupt`."""
+PR_SET_PDEATHSIG = 1
+"""``prctl`` option: signal delivered to this process when its parent thread exits (``<linux/prctl.h>``)."""
+PARENT_POLL_INTERVAL = 1.0
+"""Seconds between two parent checks of the fallback watcher thread (platforms without ``prctl``)."""
+
+
+class Terminated(KeyboardInterrupt):
+    """A termination signal received while :func:`terminate_as_interrupt` was active.
+
+    Examples
+    --------
+    >>> err = Terminated(signal.SIGTERM)
+    >>> isinstance(err, KeyboardInterrupt), err.signum, str(err)
+    (True, 15, 'SIGTERM')
+    """
+
+    def __init__(self, signum: int):
+        self.signum = int(signum)
+        super().__init__(signal.Signals(self.signum).name)
+
+
+def exit_status(err: BaseException) -> int:
+    """Conventional exit status of a process stopped by ``err``: ``128 + signal number``.
+
+    A plain :class:`KeyboardInterrupt` is Ctrl-C (SIGINT, 130).
+
+    Examples
+    --------
+    >>> exit_status(KeyboardInterrupt()), exit_status(Terminated(signal.SIGTERM))
+    (130, 143)
+    >>> exit_status(Terminated(signal.SIGHUP))
+    129
+    """
+    return 128 + int(getattr(err, "signum", signal.SIGINT))
+
+
+def signal_name(err: BaseException) -> str:
+    """Name of the signal behind an interruption (``"SIGINT"`` for a plain :class:`KeyboardInterrupt`).
+
+    Examples
+    --------
+    >>> signal_name(KeyboardInterrupt()), signal_name(Terminated(signal.SIGHUP))
+    ('SIGINT', 'SIGHUP')
+    """
+    return signal.Signals(int(getattr(err, "signum", signal.SIGINT))).name
+
+
+@contextlib.contextmanager
+def terminate_as_interrupt(signals=TERMINATION_SIGNALS):
+    """Within the block, the first of ``signals`` raises :class:`Terminated` in the main thread.
+
+    Further termination signals are ignored while the interruption unwinds (so the cleanup that stops the
+    workers and keeps the finished rows is not itself interrupted); the previous handlers are restored on exit.
+    Outside the main thread (where Python cannot install handlers) the block runs unchanged.
+
+    Examples
+    --------
+    >>> with terminate_as_interrupt():
+    ...     try:
+    ...         os.kill(os.getpid(), signal.SIGTERM)
+    ...     except KeyboardInterrupt as err:
+    ...         print(exit_status(err))
+    143
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    fired = []
+
+    def handler(signum, _frame):
+        if fired:
+            return
+        fired.append(signum)
+        raise Terminated(signum)
+
+    previous = {s: signal.signal(s, handler) for s in signals}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+@contextlib.contextmanager
+def keep_termination_handlers(signals=TERMINATION_SIGNALS):
+    """Undo changes made within the block to the handlers of ``signals`` (e.g. by ``ray.init``, which installs
+    its own SIGTERM handler that exits without the resume message).
+
+    Examples
+    --------
+    >>> before = signal.getsignal(signal.SIGTERM)
+    >>> with keep_termination_handlers():
+    ...     _ = signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    >>> signal.getsignal(signal.SIGTERM) is before
+    True
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {s: signal.getsignal(s) for s in signals}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            if h is not None:
+                signal.signal(s, h)
+
+
+def _set_parent_death_signal(signum: int) -> bool:
+    """``prctl(PR_SET_PDEATHSIG, signum)`` through libc; False where it is not available."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        return libc.prctl(PR_SET_PDEATHSIG, signum, 0, 0, 0) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def _watch_parent(parent_pid: int, interval: float) -> None:
+    """Exit this process as soon as its parent is no longer ``parent_pid`` (re-parented after its death)."""
+    while os.getppid() == parent_pid:
+        time.sleep(interval)
+    os._exit(128 + signal.SIGTERM)
+
+
+def worker_initializer(parent_pid: int) -> None:
+    """Initializer of a forked pool worker: default SIGTERM/SIGHUP and death with the parent ``parent_pid``.
+
+    Pass the parent's pid (``os.getpid()`` in the parent, before the pool starts): if the parent died between
+    the fork and this call the worker exits at once.
+
+    Examples
+    --------
+    >>> from concurrent.futures import ProcessPoolExecutor
+    >>> import multiprocessing
+    >>> with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"),
+    ...                          initializer=worker_initializer, initargs=(os.getpid(),)) as pool:
+    ...     pool.submit(os.getppid).result() == os.getpid()
+    True
+    """
+    for s in TERMINATION_SIGNALS:
+        signal.signal(s, signal.SIG_DFL)
+    if not _set_parent_death_signal(signal.SIGTERM):
+        threading.Thread(target=_watch_parent, args=(parent_pid, PARENT_POLL_INTERVAL), daemon=True,
+                         name="parent-watch").start()
+    if os.getppid() != parent_pid:
+        os._exit(128 + signal.SIGTERM)
+
+
+def stop_pool(pool, timeout: float = 5.0) -> None:
+    """Stop a ``concurrent.futures.ProcessPoolExecutor`` at once: drop queued tasks, terminate its workers
+    (SIGTERM; with :func:`worker_initializer` they exit immediately) and reap them (``timeout`` s each).
+
+    Examples
+    --------
+    >>> from concurrent.futures import ProcessPoolExecutor
+    >>> import multiprocessing
+    >>> pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"),
+    ...                            initializer=worker_initializer, initargs=(os.getpid(),))
+    >>> fut = pool.submit(time.sleep, 60)
+    >>> t0 = time.monotonic(); stop_pool(pool); time.monotonic() - t0 < 5
+    True
+    """
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in processes:
+        proc.join(timeout)
