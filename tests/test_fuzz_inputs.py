@@ -113,7 +113,8 @@ point = st.tuples(finite, finite).map(list)
 @st.composite
 def plausible_scenarios(draw):
     """Scenarios of 1-4 ships with values of the right types (mostly in range), obstacles and walls."""
-    from mmg_casadi.scenario import METHODS, PARAM_KEYS
+    from mmg_casadi.methods import NAMES as METHODS
+    from mmg_casadi.scenario import PARAM_KEYS
     settings_ = {"method": draw(st.sampled_from(METHODS))}
     for key, strat in (("dt", st.floats(0.01, 2.5)), ("t_max", st.floats(1.0, 1e4)),
                        ("r_safe", st.floats(0.1, 50)), ("collision_distance", st.floats(0.1, 3)),
