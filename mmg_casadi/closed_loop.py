@@ -9,6 +9,17 @@ progress towards the goal) is part of the state, so a rollout only has to keep t
 Layout of the scenario state (one column): ``[t, ship_0 (NS rows), ship_1, ...]`` with the per-ship rows in
 :data:`SHIP_STATE`. Numeric parameters (gains, field constants, speeds, paths, obstacles) are an input vector
 ``p`` laid out by :class:`Layout`, so one compiled Function serves every scenario of the same shape.
+
+Current and wind (table group "environment", :mod:`mmg_casadi.environment`): a layout with either (or with
+crab-angle compensation) is :attr:`Layout.disturbed` and its step takes :data:`ENV_INPUTS` as well; calm layouts
+keep the calm-water step exactly. The state's ``u, v`` are then velocities through the water and the current
+carries the ship over the ground. What guidance does with the disturbance: the fields and the velocity obstacle
+see every ship's velocity over the ground (and the velocity obstacle the own speed over the ground); ILOS and the
+waypoint switching use positions, so the ILOS integral compensates the drift; with ``crab_compensation = "on"``
+ILOS steers the heading ``psi_d = chi_d - beta`` with the crab angle ``beta`` over the ground (Fossen, Pettersen
+& Galeazzi 2015). The reactive methods' desired heading is not crab-compensated, and gusts
+(:func:`~mmg_casadi.environment.gust_speeds`) are not wired into the closed loop. The model envelope (divergence)
+is checked on the velocities through the water.
 """
 
 from __future__ import annotations

@@ -224,3 +224,18 @@ def test_cli_ranges_are_checked(tmp_path, capsys):
     assert "--current" in capsys.readouterr().err
     assert main(["study", "disturbance", "--wind", "100", "--out", str(tmp_path / "b")]) == 2
     assert "--wind" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_disturbance_study_writes_its_metrics(tmp_path):
+    import json
+
+    from mmg_casadi.cli import main
+    assert main(["study", "disturbance", "--out", str(tmp_path)]) == 0
+    m = json.loads((tmp_path / "metrics.json").read_text())
+    assert m["straight_leg"]["current"]["integral_removes"]["steady"] >= 0.97
+    assert set(m["square"]) == {"gains", "calm", "current", "wind"}
+    assert m["square"]["calm"]["paper"]["status"] == "reached"
+    assert set(m["encounters"]) == {"head-on-current", "head-on-wind", "crossing-current", "crossing-wind"}
+    for name in ("straight_leg.png", "square.png", "encounters/head-on-current.png"):
+        assert (tmp_path / name).stat().st_size > 0
