@@ -24,7 +24,7 @@ from .io import write_json
 from .params import PARAMETERS, check_value, help_text, load_file, markdown_table
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
-STUDIES = QUICK_STUDIES + ("statistics", "all")
+STUDIES = QUICK_STUDIES + ("disturbance", "statistics", "all")
 _FLAGS = {"base_seed": "--seed", "out_dir": "--out"}
 """Library argument names whose flag is not ``--`` + the name with dashes."""
 
@@ -118,6 +118,10 @@ def build_parser() -> argparse.ArgumentParser:
             for flag, key in (("--ilos-delta", "ilos_delta"), ("--ilos-k", "ilos_k"), ("--kp", "kp"),
                               ("--kd", "kd")):
                 sp.add_argument(flag, type=_float, dest=key, help=f"same as --set {key}=VALUE")
+        if name == "disturbance":
+            sp.add_argument("--current", type=_float, default=0.1, help="beam current speed (fraction of design "
+                            "speed), default 0.1")
+            sp.add_argument("--wind", type=_float, default=15.0, help="beam true wind speed (m/s), default 15")
         if name == "statistics":
             sp.add_argument("--runs", type=_int, default=200, help="runs per environment and method")
             sp.add_argument("--envs", default="1-5", help="environments, e.g. 1-5 or 1,3")
@@ -125,6 +129,10 @@ def build_parser() -> argparse.ArgumentParser:
             sp.add_argument("--backend", default="local", help="local | ray")
             sp.add_argument("--address", default=None, help="Ray cluster address (with --backend ray)")
             sp.add_argument("--workers", type=_int, default=None, help="local worker processes / Ray CPUs")
+            sp.add_argument("--current", default=None, metavar="LO-HI", help="per-run current speed range "
+                            "(fraction of design speed, direction uniform), e.g. 0-0.1")
+            sp.add_argument("--wind", default=None, metavar="LO-HI", help="per-run true wind speed range (m/s, "
+                            "direction uniform), e.g. 0-15")
 
     t = sub.add_parser("tune", help="controller and field tuning")
     tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf}")
@@ -209,8 +217,12 @@ def _study(a) -> dict:
         if n != "waypoint-square" and getattr(a, "methods", None):
             kw["methods"] = a.methods
         if n == "statistics":
+            from .disturbance_sampling import parse_range
             kw.update(runs=a.runs, envs=a.envs, base_seed=a.seed, backend=a.backend, address=a.address,
-                      workers=a.workers)
+                      workers=a.workers, current=a.current and parse_range(a.current, "current"),
+                      wind=a.wind and parse_range(a.wind, "wind"))
+        if n == "disturbance":
+            kw.update(current=a.current, wind=a.wind)
         out[n] = mod.run(target, **kw)
     return out
 

@@ -9,6 +9,17 @@ progress towards the goal) is part of the state, so a rollout only has to keep t
 Layout of the scenario state (one column): ``[t, ship_0 (NS rows), ship_1, ...]`` with the per-ship rows in
 :data:`SHIP_STATE`. Numeric parameters (gains, field constants, speeds, paths, obstacles) are an input vector
 ``p`` laid out by :class:`Layout`, so one compiled Function serves every scenario of the same shape.
+
+Current and wind (table group "environment", :mod:`mmg_casadi.environment`): a layout with either (or with
+crab-angle compensation) is :attr:`Layout.disturbed` and its step takes :data:`ENV_INPUTS` as well; calm layouts
+keep the calm-water step exactly. The state's ``u, v`` are then velocities through the water and the current
+carries the ship over the ground. What guidance does with the disturbance: the fields and the velocity obstacle
+see every ship's velocity over the ground (and the velocity obstacle the own speed over the ground); ILOS and the
+waypoint switching use positions, so the ILOS integral compensates the drift; with ``crab_compensation = "on"``
+ILOS steers the heading ``psi_d = chi_d - beta`` with the crab angle ``beta`` over the ground (Fossen, Pettersen
+& Galeazzi 2015). The reactive methods' desired heading is not crab-compensated, and gusts
+(:func:`~mmg_casadi.environment.gust_speeds`) are not wired into the closed loop. The model envelope (divergence)
+is checked on the velocities through the water.
 """
 
 from __future__ import annotations
@@ -20,7 +31,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from . import fields, methods
+from . import environment, fields, methods
 from .control import pd_heading
 from .errors import ParameterError, ScenarioError
 from .guidance import ilos_step_terms, switch_waypoint, validate_waypoints
@@ -65,6 +76,11 @@ SHIP_PARAMS = ("n_rpm", "n_path", "stays")
 
 ENVELOPE = {"speed": 3.0, "r": 5.0, "position": 1.0e4}
 
+ENV_INPUTS = ("V_c", "beta_c", "U_w", "psi_w", "crab")
+"""Trailing numeric inputs of a disturbed step (:attr:`Layout.disturbed`): the model's disturbance ``env =
+[V_c, beta_c, U_w, psi_w]`` (:mod:`mmg_casadi.environment`, prime-II units, rad) and the crab-angle switch (0/1);
+see :func:`env_values`."""
+
 
 @dataclass(frozen=True)
 class Layout:
@@ -86,6 +102,9 @@ class Layout:
     smooth : float or None
         ``None`` for the exact switching logic; a sharpness ``s > 0`` replaces every switch by a sigmoid of
         that sharpness (for gradient-based tuning).
+    disturbed : bool
+        Current / wind / crab-angle compensation present (:func:`is_disturbed`): the step takes the inputs
+        :data:`ENV_INPUTS` after the others. Calm layouts keep the calm-water step exactly.
     """
 
     methods: tuple
@@ -95,6 +114,7 @@ class Layout:
     vo_candidates: int = PARAMETERS["vo_candidates"].default
     vo_cone: str = PARAMETERS["vo_cone"].default
     smooth: float | None = None
+    disturbed: bool = False
 
     @property
     def n_ships(self) -> int:
@@ -113,7 +133,7 @@ class Layout:
     def np(self) -> int:
         """Rows of the parameter vector."""
         return (len(GLOBAL_PARAMS) + self.n_ships * (len(SHIP_PARAMS) + 2 * self.max_path)
-                + 3 * self.n_obstacles + 4 * self.n_walls)
+                + 3 * self.n_obstacles + 4 * self.n_walls + (len(ENV_INPUTS) if self.disturbed else 0))
 
     def key(self) -> str:
         """Short identifier used in Function names."""
@@ -121,6 +141,7 @@ class Layout:
         if len(set(self.methods)) == 1:
             meth = f"{self.methods[0].replace('-', '')}x{self.n_ships}"
         s = "" if self.smooth is None else f"_s{self.smooth:g}".replace(".", "p")
+        s += "_env" if self.disturbed else ""
         return f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}{s}"
 
     def split_params(self, p):
@@ -150,16 +171,19 @@ class Layout:
         i += 3 * self.n_obstacles
         out["walls"] = ca.reshape(p[i:i + 4 * self.n_walls], 4, self.n_walls)
         i += 4 * self.n_walls
+        if self.disturbed:
+            out["env"] = p[i:i + len(ENV_INPUTS)]
+            i += len(ENV_INPUTS)
         assert i == self.np
         return out
 
 
-def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(), walls=()) -> np.ndarray:
+def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(), walls=(), env=None) -> np.ndarray:
     """Numeric parameter vector for ``layout``.
 
     ``ships[i]`` has ``n_rpm``, ``path`` (K_i x 2 array: start then waypoints) and ``stays``; paths are padded to
     ``layout.max_path`` columns by repeating the last waypoint. ``obstacles`` are ``(x, y, radius)``, walls
-    ``(ax, ay, bx, by)``.
+    ``(ax, ay, bx, by)``; ``env`` the :data:`ENV_INPUTS` of a disturbed layout (:func:`env_values`).
     """
     vals = [float(globals_[name]) for name in GLOBAL_PARAMS]
     for i, s in enumerate(ships):
@@ -174,6 +198,10 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
         vals += [float(o[0]), float(o[1]), float(o[2])]
     for w in walls:
         vals += [float(v) for v in w]
+    if layout.disturbed:
+        if env is None or len(env) != len(ENV_INPUTS):
+            raise ValueError(f"a disturbed layout needs env = {ENV_INPUTS}, got {env!r}")
+        vals += [float(v) for v in env]
     p = np.array(vals)
     assert p.size == layout.np
     return p
@@ -216,7 +244,7 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
     """
     ship = ship or load_kcs()
     steering = steering or load_steering()
-    mmg = build_mmg(ship, steering)
+    mmg = build_mmg(ship, steering, disturbed=layout.disturbed)
     N, S, W = layout.n_ships, layout.n_obstacles, layout.n_walls
     sm = layout.smooth
     x = ca.SX.sym("x", layout.nx)
@@ -230,6 +258,12 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
     psi = [Xi[S_["psi"]] for Xi in X]
     vel = [ca.vertcat(Xi[S_["u"]] * ca.cos(Xi[S_["psi"]]) - Xi[S_["v"]] * ca.sin(Xi[S_["psi"]]),
                       Xi[S_["u"]] * ca.sin(Xi[S_["psi"]]) + Xi[S_["v"]] * ca.cos(Xi[S_["psi"]])) for Xi in X]
+    env_args = ()
+    if layout.disturbed:  # u, v are through the water; guidance sees velocities over the ground
+        E = P["env"]
+        env_args = (E[0:4],)
+        vel = [ca.vertcat(*environment.velocity_over_ground(Xi[S_["u"]], Xi[S_["v"]], Xi[S_["psi"]], E[0], E[1]))
+               for Xi in X]
     running = t < P["t_max"] - 1e-9
     sailing = [ca.logic_and(Xi[S_["status"]] == 0, running) for Xi in X]
     # A ship is present as an obstacle while sailing, or after its goal if it stays; a diverged ship is removed.
@@ -258,6 +292,9 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
             active = ca.SX(1, 0)
 
         psi_ilos = terms["psi_d"]
+        if layout.disturbed:  # optional crab-angle compensation: steer the course, psi_d = chi_d - beta
+            u_g, v_g = environment.ground_velocity(Xi[S_["u"]], Xi[S_["v"]], psi[i], E[0], E[1])
+            psi_ilos = psi_ilos - E[4] * environment.crab_angle(u_g, v_g)
         spec = methods.get(method, f"methods[{i}]")
         if spec.builder is None or (M == 0 and W == 0):
             psi_d = psi_ilos
@@ -275,8 +312,8 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
                                                 d_act=P["wall_d_act"])
                 near_wall = _indicator(ca.sumsqr(wall_vec) - 1e-12, sm)
             w_react = ca.fmax(any_active, near_wall) if sm is None else 1 - (1 - any_active) * (1 - near_wall)
-            inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i],
-                                    speed=ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2), goal=goal,
+            speed = ca.norm_2(vel[i]) if layout.disturbed else ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2)
+            inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal,
                                     nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=active, P=P,
                                     layout=layout)
             field_vec = spec.builder(inputs) + wall_vec
@@ -289,9 +326,9 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
 
         delta_c = pd_heading(psi[i], psi_d, Xi[S_["r"]], P["kp"], P["kd"], P["delta_max"])
         xm = Xi[:NX]
-        xm_next = rk4(mmg, xm, (delta_c, Pi["n_rpm"]), dt / n_sub)
+        xm_next = rk4(mmg, xm, (delta_c, Pi["n_rpm"], *env_args), dt / n_sub)
         for _ in range(n_sub - 1):
-            xm_next = rk4(mmg, xm_next, (delta_c, Pi["n_rpm"]), dt / n_sub)
+            xm_next = rk4(mmg, xm_next, (delta_c, Pi["n_rpm"], *env_args), dt / n_sub)
         y_int_next = Xi[S_["y_int"]] + dt * terms["y_int_dot"] * (1 - w_react)
         pos_next = xm_next[3:5]
         idx_next, reached = switch_waypoint(pos_next, Pi["path"], Xi[S_["idx"]], Pi["n_path"], P["goal_tolerance"])
@@ -387,6 +424,36 @@ def step_values(resolved: dict) -> dict:
         src = _DEG_INPUTS.get(name)
         out[name] = math.radians(float(resolved[src])) if src else float(resolved[name])
     return out
+
+
+def is_disturbed(resolved: dict) -> bool:
+    """Whether a resolved parameter set has a current, a wind or crab-angle compensation (a disturbed layout).
+
+    Examples
+    --------
+    >>> is_disturbed(resolve()), is_disturbed(resolve({"current_direction_deg": 90.0}))
+    (False, False)
+    >>> is_disturbed(resolve({"wind_speed": 15.0}))
+    True
+    """
+    return (float(resolved["current_speed"]) > 0.0 or float(resolved["wind_speed"]) > 0.0
+            or resolved["crab_compensation"] == "on")
+
+
+def env_values(resolved: dict, ship: ShipParams | None = None) -> list[float]:
+    """The :data:`ENV_INPUTS` of a resolved parameter set: speeds over ``ship``'s design speed (default the KCS,
+    12.347 m/s; the table's current is already a fraction of it, its wind in m/s), directions in rad, crab 0/1.
+
+    Examples
+    --------
+    >>> [round(v, 4) for v in env_values(resolve({"current_speed": 0.1, "current_direction_deg": 90.0,
+    ...                                          "wind_speed": 15.0, "crab_compensation": "on"}))]
+    [0.1, 1.5708, 1.2149, 0.0, 1.0]
+    """
+    U = (ship or load_kcs()).U_design
+    return [float(resolved["current_speed"]), math.radians(float(resolved["current_direction_deg"])),
+            float(resolved["wind_speed"]) / U, math.radians(float(resolved["wind_direction_deg"])),
+            1.0 if resolved["crab_compensation"] == "on" else 0.0]
 
 
 def default_globals(**overrides) -> dict:
@@ -511,7 +578,8 @@ class ClosedLoopModel:
         walls : sequence of (ax, ay, bx, by)
             Wall segments.
         """
-        return pack_params(self.layout, self.values, ships, obstacles, walls)
+        return pack_params(self.layout, self.values, ships, obstacles, walls,
+                           env_values(self.params) if self.layout.disturbed else None)
 
     def initial_state(self, ships: list[dict]) -> np.ndarray:
         """Scenario state at t = 0 (:func:`initial_state`).
@@ -646,7 +714,8 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
         walls += [(a[0], a[1], b[0], b[1]) for a, b in zip(pts[:-1], pts[1:])]
     layout = Layout(methods=methods_, n_obstacles=len(sc.obstacles), n_walls=len(walls),
                     max_path=max(1 + len(s.waypoints) for s in sc.ships),
-                    vo_candidates=resolved["vo_candidates"], vo_cone=resolved["vo_cone"])
+                    vo_candidates=resolved["vo_candidates"], vo_cone=resolved["vo_cone"],
+                    disturbed=is_disturbed(resolved))
     model = ClosedLoopModel(layout, resolved)
     ships = tuple({"n_rpm": propeller_rpm_for_speed(s.speed), "path": [s.start, *s.waypoints], "stays": s.stays,
                    "start": s.start, "heading": math.radians(s.heading_deg), "speed": s.speed} for s in sc.ships)

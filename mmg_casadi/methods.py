@@ -33,13 +33,14 @@ class GuidanceInputs:
     Parameters
     ----------
     pos, vel : SX (2×1)
-        Own position (L) and global velocity (U).
+        Own position (L) and global velocity over the ground (U; through the water plus any current).
     psi, speed : SX
         Own heading (rad) and speed over ground (U).
     goal : SX (2×1)
         The waypoint being tracked (L).
     nb_pos, nb_vel : SX (2×M)
-        Neighbours' positions and global velocities (other ships, then static obstacles with zero velocity).
+        Neighbours' positions and global velocities over the ground (other ships, then static obstacles with
+        zero velocity).
     nb_radius, active : SX (1×M)
         Neighbours' radii (L) and the 0/1 (or smooth) mask of neighbours present within R_safe.
     P : dict

@@ -44,6 +44,12 @@ reached their goals. ``guidance_call_us`` is the compiled time of one guidance e
 obstacle + ILOS + PD) per ship, measured per batch on the batch's initial and final states; it is a timing
 and differs between repetitions, everything else is a deterministic function of
 ``(environment, method, run, seed, t_max)``.
+
+With ``current``/``wind`` ranges (:mod:`mmg_casadi.disturbance_sampling`) every run meets its own steady
+current and wind, drawn from ``(environment, run, seed)`` by a generator of its own (the same for every method;
+the encounters are those of the calm study); the columns ``current_speed``, ``current_direction_deg``,
+``wind_speed``, ``wind_direction_deg`` of ``runs.csv`` record it (or the fixed values of ``params``), and
+``study.json`` the ranges: a study is resumed only with the same ranges.
 """
 
 from __future__ import annotations
@@ -65,6 +71,7 @@ import numpy as np
 
 from . import methods as method_registry
 from .closed_loop import ClosedLoopModel, Layout, build_problem
+from .disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
 from .errors import InputError
 from .io import write_json
 from .params import PARAMETERS, diff, resolve
@@ -263,7 +270,7 @@ def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT
 
 
 def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params: dict | None = None,
-              chunk: int = DEFAULT_CHUNK) -> list[dict]:
+              chunk: int = DEFAULT_CHUNK, disturbance: DisturbanceRanges | None = None) -> list[dict]:
     """Simulate runs of one (environment, method) together and return their result rows.
 
     Parameters
@@ -280,6 +287,8 @@ def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params
         Parameter values of every run (by name; the table's defaults for the rest).
     chunk : int
         Steps per compiled chunk.
+    disturbance : DisturbanceRanges, optional
+        Ranges of the per-run current and wind (:func:`~mmg_casadi.disturbance_sampling.sample_disturbance`).
 
     Returns
     -------
@@ -290,13 +299,24 @@ def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params
     if not runs:
         return []
     overrides = _non_default(params)
-    scenarios = [sampled_scenario(environment, method, r, base_seed, params=overrides) for r in runs]
+    env = _run_disturbances(environment, runs, base_seed, params, disturbance)
+    scenarios = [sampled_scenario(environment, method, r, base_seed, params=_non_default({**overrides, **d}))
+                 for r, d in zip(runs, env)]
     results = run_scenarios(scenarios, chunk=chunk)
     rows = []
-    for r, res in zip(runs, results):
-        row = {"environment": int(environment), "method": method, "run": r, "seed": int(base_seed), **res}
+    for r, res, d in zip(runs, results, env):
+        row = {"environment": int(environment), "method": method, "run": r, "seed": int(base_seed), **res, **d}
         rows.append({c: row.get(c) for c in RUN_COLUMNS})
     return rows
+
+
+def _run_disturbances(environment: int, runs, base_seed: int, params: dict | None,
+                      ranges: DisturbanceRanges | None) -> list[dict]:
+    """Per run, the :data:`ENV_COLUMNS` values: sampled from ``ranges`` if any, else those of ``params``."""
+    if ranges is not None and ranges.active:
+        return [sample_disturbance(environment, r, base_seed, ranges) for r in runs]
+    fixed = resolve(params)
+    return [{c: fixed[c] for c in ENV_COLUMNS} for _ in runs]
 
 
 # ------------------------------------------------------------------------------------------------ planning
@@ -304,7 +324,7 @@ def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params
 @dataclass(frozen=True)
 class BatchTask:
     """One unit of work: runs of one (environment, method) with one parameter set (``params``: sorted
-    ``(name, value)`` pairs of the overrides)."""
+    ``(name, value)`` pairs of the overrides) and the ranges of the per-run disturbance."""
 
     environment: int
     method: str
@@ -312,10 +332,11 @@ class BatchTask:
     base_seed: int = 0
     params: tuple = ()
     chunk: int = DEFAULT_CHUNK
+    disturbance: DisturbanceRanges | None = None
 
     def __call__(self) -> list[dict]:
         return run_batch(self.environment, self.method, list(self.runs), self.base_seed,
-                         params=dict(self.params), chunk=self.chunk)
+                         params=dict(self.params), chunk=self.chunk, disturbance=self.disturbance)
 
 
 def _run_task(task: BatchTask) -> list[dict]:
@@ -323,7 +344,8 @@ def _run_task(task: BatchTask) -> list[dict]:
 
 
 def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int = 0, params: dict | None = None,
-                 batch_size: int = DEFAULT_BATCH, chunk: int = DEFAULT_CHUNK) -> list[BatchTask]:
+                 batch_size: int = DEFAULT_BATCH, chunk: int = DEFAULT_CHUNK,
+                 disturbance: DisturbanceRanges | None = None) -> list[BatchTask]:
     """Batches of the runs ``0..runs-1`` of every (environment, method) whose key is not in ``done``.
 
     Batches are interleaved over the cells (first batch of every cell, then the second, ...), so the
@@ -340,7 +362,7 @@ def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int =
     for env in envs:
         for m in methods:
             todo = [r for r in range(runs) if (env, m, r) not in done]
-            cells.append([BatchTask(env, m, tuple(todo[i:i + batch_size]), base_seed, items, chunk)
+            cells.append([BatchTask(env, m, tuple(todo[i:i + batch_size]), base_seed, items, chunk, disturbance)
                           for i in range(0, len(todo), batch_size)])
     tasks = []
     for k in range(max((len(c) for c in cells), default=0)):
@@ -595,7 +617,7 @@ def _check_int(field: str, value, low: int) -> int:
 def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS, base_seed: int = 0,
               params: dict | None = None, backend: str = "local", address: str | None = None,
               workers: int | None = None, progress: bool = True, batch_size: int = DEFAULT_BATCH,
-              chunk: int = DEFAULT_CHUNK, executor=None):
+              chunk: int = DEFAULT_CHUNK, executor=None, current=None, wind=None):
     """Run (or resume) the statistical study and write its outputs into ``out_dir``.
 
     Parameters
@@ -631,6 +653,11 @@ def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT
         Steps per compiled chunk.
     executor : LocalExecutor or RayExecutor, optional
         Use this executor instead of one made from ``backend``/``address``/``workers`` (not closed here).
+    current : (float, float), optional
+        Range of a per-run current speed (fraction of U_des, in [0, 1]; direction uniform); a resumed table
+        must have been made with the same range. Not together with a ``current_speed`` in ``params``.
+    wind : (float, float), optional
+        Range of a per-run true wind speed (m/s, in [0, 60]; direction uniform), likewise.
 
     Returns
     -------
@@ -649,12 +676,17 @@ def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT
     batch_size = _check_int("batch_size", batch_size, 1)
     chunk = _check_int("chunk", chunk, 1)
     resolved = resolve(params, prefix="params.")
+    ranges = DisturbanceRanges(current=current, wind=wind)
+    for name, rng in (("current", ranges.current), ("wind", ranges.wind)):
+        for key in (f"{name}_speed", f"{name}_direction_deg"):
+            if rng is not None and resolved[key] != PARAMETERS[key].default:
+                raise InputError(name, f"nothing while params sets {key} (a fixed {name})", list(rng))
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with _exclusive(out):
         return _run_study(out, runs, envs, methods, base_seed, resolved, backend, address, workers, progress,
-                          batch_size, chunk, executor)
+                          batch_size, chunk, executor, ranges)
 
 
 @contextlib.contextmanager
@@ -672,7 +704,7 @@ def _exclusive(out: Path):
 
 
 def _run_study(out, runs, envs, methods, base_seed, params, backend, address, workers, progress, batch_size,
-               chunk, executor):
+               chunk, executor, ranges=DisturbanceRanges()):
     table = ResultsTable(out / "runs.csv")
     planned = {(e, m, r) for e in envs for m in methods for r in range(runs)}
     stored = [row for row in table.read() if (row["environment"], row["method"], row["run"]) in planned]
@@ -681,9 +713,9 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
             raise InputError("base_seed", f"the seed {row['seed']} that {table.path} was made with (or a new "
                              "output directory)", base_seed)
     done = {(row["environment"], row["method"], row["run"]) for row in stored}
-    _check_study_params(out / "study.json", params, has_rows=bool(table.completed()))
+    _check_study_params(out / "study.json", params, has_rows=bool(table.completed()), ranges=ranges)
     tasks = plan_batches(envs, methods, runs, done=done, base_seed=base_seed, params=params,
-                         batch_size=batch_size, chunk=chunk)
+                         batch_size=batch_size, chunk=chunk, disturbance=ranges)
     log = sys.stderr if progress else None
 
     own_executor = executor is None
@@ -695,7 +727,9 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
         if tasks:
             cells = list(dict.fromkeys((t.environment, t.method) for t in tasks))
             n_compile = workers or os.cpu_count() or 1
-            prepare_layouts([layout_for(e, m, _non_default(params)) for e, m in cells], n_compile, log=log)
+            prepare_layouts([layout_for(e, m, _non_default({**params, **_run_disturbances(e, [0], base_seed, params,
+                                                                                        ranges)[0]}))
+                             for e, m in cells], n_compile, log=log)
             bar = None
             if progress:
                 bar = progress_bar(len(planned), desc="statistics", initial=len(done))
@@ -724,16 +758,18 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
     failures = write_failures(rows, out / "failures", params=params)
 
     config = {"runs": runs, "envs": list(envs), "methods": list(methods), "base_seed": base_seed,
-              "backend": backend, "address": address, "workers": workers, "batch_size": batch_size, "chunk": chunk}
+              "backend": backend, "address": address, "workers": workers, "batch_size": batch_size, "chunk": chunk,
+              **ranges.to_dict()}
     write_json(out / "metrics.json", {
         "config": config, "params": params, "summary": summary.rows, "runs_total": len(rows),
         "runs_new": new_runs, "elapsed_s": elapsed, "failure_files": [str(p.relative_to(out)) for p in failures]})
     return summary
 
 
-def _check_study_params(path: Path, params: dict, *, has_rows: bool) -> None:
-    """Refuse to resume a table made with other parameters (they are not columns of ``runs.csv``); record them
-    in ``study.json``. The error names the first differing parameter."""
+def _check_study_params(path: Path, params: dict, *, has_rows: bool,
+                        ranges: DisturbanceRanges = DisturbanceRanges()) -> None:
+    """Refuse to resume a table made with other parameters (they are not columns of ``runs.csv``) or other
+    disturbance ranges; record them in ``study.json``. The error names the first differing parameter."""
     import json
     if has_rows and path.exists():
         try:
@@ -746,8 +782,13 @@ def _check_study_params(path: Path, params: dict, *, has_rows: bool) -> None:
         if key is not None:
             raise InputError(f"params.{key}", f"{stored.get(key)!r}, the value {path.parent / 'runs.csv'} was made "
                              "with (or a new output directory)", params[key])
+        made = json.loads(path.read_text(encoding="utf-8")).get("disturbance") or DisturbanceRanges().to_dict()
+        for name, rng in ranges.to_dict().items():
+            if made.get(name) != rng:
+                raise InputError(name, f"{made.get(name)!r}, the range {path.parent / 'runs.csv'} was made with "
+                                 "(or a new output directory)", rng)
     if not path.exists() or not has_rows:
-        write_json(path, {"params": params})
+        write_json(path, {"params": params, "disturbance": ranges.to_dict()})
 
 
 def write_failures(rows, directory, *, params: dict | None = None, limit: int = MAX_FAILURE_FILES) -> list[Path]:
@@ -776,7 +817,9 @@ def write_failures(rows, directory, *, params: dict | None = None, limit: int = 
     overrides = _non_default(params)
     for (env, method), failed in by_cell.items():
         for r in sorted(failed, key=lambda r: r["run"])[:limit]:
-            sc = sampled_scenario(env, method, r["run"], r["seed"] or 0, params=overrides)
+            recorded = {c: r[c] for c in ENV_COLUMNS if r.get(c) is not None and r[c] == r[c]}
+            sc = sampled_scenario(env, method, r["run"], r["seed"] or 0, params=_non_default({**overrides,
+                                                                                             **recorded}))
             path = directory / f"env{env}_{method}_run{r['run']}.toml"
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(dump_scenario(sc), encoding="utf-8")

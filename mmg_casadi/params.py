@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from .errors import InputError, ParameterError, check_range
 
 GROUPS = ("simulation", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "walls",
-          "velocity-obstacle", "outcome")
+          "velocity-obstacle", "outcome", "environment")
 """Parameter groups, in the order of the README table; a method's guidance uses its own group(s)."""
 
 
@@ -190,6 +190,21 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     # outcome
     _P("stall_window", 50.0, 0.0, None, "L/U", "a run that made no progress towards its goal for this long "
        "before t_max is 'stalled'", "our choice", "outcome", low_open=True),
+    # environment (calm water by default, as in the paper; see mmg_casadi.environment)
+    _P("current_speed", 0.0, 0.0, 1.0, "U", "speed of a uniform current (fraction of the design speed)",
+       "our choice: calm water as in the paper; model Fossen 2021 §10.3 (mmg_casadi.environment)",
+       "environment"),
+    _P("current_direction_deg", 0.0, -360.0, 360.0, "deg", "direction the current flows TOWARDS (from x "
+       "towards y)", "our choice", "environment"),
+    _P("wind_speed", 0.0, 0.0, 60.0, "m/s", "true wind speed (the model takes it over U_des = 12.347 m/s)",
+       "our choice: calm air as in the paper; loads Blendermann 1994, KCS windage our estimate "
+       "(mmg_casadi.environment)", "environment"),
+    _P("wind_direction_deg", 0.0, -360.0, 360.0, "deg", "direction the wind comes FROM (from x towards y)",
+       "our choice", "environment"),
+    _P("crab_compensation", "off", None, None, "", "'on': ILOS steers ψ_d = χ_d − β with the measured crab "
+       "angle β = atan2(v_g, u_g) over the ground", "Fossen, Pettersen & Galeazzi 2015 (IEEE TCST 23(2)); off "
+       "so that the ILOS integral alone compensates drift, as in the paper", "environment", kind="choice",
+       choices=("off", "on")),
 )}
 """Every parameter, by name."""
 

@@ -22,6 +22,7 @@ RUN_COLUMNS: tuple[str, ...] = (
     "environment", "method", "run", "seed", "success", "fleet_success", "failure", "failure_pair",
     "failure_time", "time_to_goal", "ce", "mcte", "fleet_time_to_goal", "fleet_ce", "fleet_mcte",
     "min_distance", "guidance_call_us", "n_ships", "n_obstacles",
+    "current_speed", "current_direction_deg", "wind_speed", "wind_direction_deg",
 )
 """Columns of the results CSV, in order."""
 

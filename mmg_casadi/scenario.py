@@ -23,6 +23,18 @@ times non-dimensional (L/U). A scenario file looks like::
     radius = 0.5
     [[walls]]
     points = [[0.0, 5.0], [50.0, 55.0]]   # polyline; each consecutive pair of points is one wall segment
+    [environment]                # optional; calm water without it
+    current_speed = 0.1          # fraction of design speed, [0, 1]
+    current_direction = 90.0     # degrees, the direction the current flows TOWARDS
+    wind_speed = 15.0            # m/s, [0, 60]
+    wind_direction = -90.0       # degrees, the direction the wind comes FROM
+    # crab_compensation = "on"   # ILOS steers the course over the ground (default "off")
+
+The ``[environment]`` keys are aliases of the table parameters ``current_speed``, ``current_direction_deg``,
+``wind_speed``, ``wind_direction_deg`` and ``crab_compensation`` (:data:`ENVIRONMENT_KEYS`), which ``[settings]``,
+``--params``, ``--set`` and ``params=`` accept as well; giving one in both tables is an error. The model is
+described in :mod:`mmg_casadi.environment`: the ship's ``u, v`` are velocities through the water, the current
+carries it over the ground, the wind load comes from Blendermann (1994).
 
 Besides ``method``, ``[settings]`` accepts every parameter of the table :data:`mmg_casadi.params.PARAMETERS`
 (range-checked here); ``dt``, ``t_max``, ``r_safe``, ``collision_distance`` and ``goal_tolerance`` are fields of
@@ -53,7 +65,11 @@ SETTINGS_KEYS = ("method",) + tuple(PARAMETERS)
 SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays")
 OBSTACLE_KEYS = ("position", "radius")
 WALL_KEYS = ("points",)
-TOP_KEYS = ("settings", "ships", "obstacles", "walls")
+TOP_KEYS = ("settings", "ships", "obstacles", "walls", "environment")
+ENVIRONMENT_KEYS = {"current_speed": "current_speed", "current_direction": "current_direction_deg",
+                    "wind_speed": "wind_speed", "wind_direction": "wind_direction_deg",
+                    "crab_compensation": "crab_compensation"}
+"""Keys of the optional ``[environment]`` table and the table parameter each one sets."""
 SPEED_RANGE = (0.2, 1.2)
 SHIP_HALF_LENGTH = 0.5
 
@@ -343,8 +359,23 @@ def _settings(d: dict) -> Settings:
                      methods.NAMES)
     values = {k: check_value(k, v, field=f"settings.{k}", cls=ScenarioError) for k, v in s.items()
               if k != "method"}
+    values.update(_environment(d, values))
     kw = {k: values.pop(k) for k in SETTINGS_FIELDS if k in values}
     return Settings(method, params=values, **kw)
+
+
+def _environment(d: dict, settings: dict) -> dict:
+    """Table parameters from the optional [environment] table (checked; none may repeat a [settings] key)."""
+    if "environment" not in d:
+        return {}
+    env = _table(d["environment"], "environment", tuple(ENVIRONMENT_KEYS))
+    out = {}
+    for k, v in env.items():
+        name = ENVIRONMENT_KEYS[k]
+        if name in settings:
+            raise ScenarioError(f"environment.{k}", f"a value given once (settings.{name} gives it already)", v)
+        out[name] = check_value(name, v, field=f"environment.{k}", cls=ScenarioError)
+    return out
 
 
 def _ship(t: dict, i: int) -> ShipSpec:

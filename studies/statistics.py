@@ -1,7 +1,7 @@
 """The paper's statistical analysis (section "Statistical Analysis"): random encounters in five environments.
 
 ``mmg-casadi study statistics [--runs N] [--envs 1-5] [--methods a,b] [--params P.toml] [--backend local|ray]
-[--address A] [--workers W] [--seed S] --out DIR`` runs (or resumes) :func:`mmg_casadi.montecarlo.run_study`:
+[--address A] [--workers W] [--seed S] [--current LO-HI] [--wind LO-HI] --out DIR`` runs (or resumes) :func:`mmg_casadi.montecarlo.run_study`:
 ``N`` runs per environment and method (the paper: 5000), by default for the modified sink-vortex APF, the
 inverse-square APF and the velocity obstacle. Outputs in ``DIR``: ``runs.csv``, ``study.json``, ``summary.csv``,
 ``summary.md``, ``statistics.png``, ``metrics.json`` and ``failures/*.toml`` (replayable with
@@ -18,11 +18,13 @@ from mmg_casadi.montecarlo import DEFAULT_METHODS, run_study
 
 
 def run(out, *, runs: int = 200, envs="1-5", methods=None, base_seed: int = 0, params=None,
-        backend: str = "local", address=None, workers=None) -> dict:
-    """Run the study (see :func:`mmg_casadi.montecarlo.run_study`); returns the config, parameters and summary."""
+        backend: str = "local", address=None, workers=None, current=None, wind=None) -> dict:
+    """Run the study (see :func:`mmg_casadi.montecarlo.run_study`, also for the per-run ``current`` and ``wind``
+    speed ranges); returns the config, parameters and summary."""
     out = Path(out)
     summary = run_study(out, runs=runs, envs=envs, methods=methods or DEFAULT_METHODS, base_seed=base_seed,
-                        params=params, backend=backend, address=address, workers=workers)
+                        params=params, backend=backend, address=address, workers=workers, current=current,
+                        wind=wind)
     print(summary.to_markdown(), file=sys.stderr)
     import json
     return json_safe(json.loads((out / "metrics.json").read_text(encoding="utf-8")))

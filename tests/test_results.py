@@ -29,6 +29,8 @@ def _row(env: int, method: str, run: int, success: bool = True, **extra) -> dict
         "time_to_goal": 60.0 + run / 3 if success else math.nan, "ce": 0.1 + run / 7, "mcte": 0.2 + run / 11,
         "fleet_time_to_goal": 70.0 + run, "fleet_ce": 0.15, "fleet_mcte": 0.25, "min_distance": 3.0 + run / 13,
         "guidance_call_us": 4.0 + run / 17, "n_ships": 3, "n_obstacles": 1,
+        "current_speed": 0.1 * run / 23, "current_direction_deg": -170.0 + run, "wind_speed": 15.0 * run / 29,
+        "wind_direction_deg": 33.5 - run,
     }
     row.update(extra)
     return row
