@@ -75,8 +75,8 @@ def stagnation_point(field: str = "inverse-square", goal=(10.0, 0.0), obstacle=(
                      *, radius: float = 0.5, tol: float = 1e-9, **params) -> np.ndarray:
     """Stagnation point (L) of ``field`` nearest (in Newton's sense) to ``guess``: a root of V(pos) = 0 found
     with ``ca.rootfinder(..., "newton", ...)``. ``params`` override the field's defaults (see
-    :func:`field_params`). Raises ``RuntimeError`` if Newton does not converge to |V| < ``tol`` · |V(guess)|
-    within 10 (|goal − obstacle| + |guess − obstacle|) of the obstacle (the fields vanish at infinity).
+    :func:`field_params`). Raises ``RuntimeError`` if Newton does not converge to ``|V| < tol · |V(guess)|``
+    within ``10 (|goal − obstacle| + |guess − obstacle|)`` of the obstacle (the fields vanish at infinity).
 
     Examples
     --------
