@@ -52,7 +52,21 @@ def _write(path: Path, text: str) -> None:
 
 def write_parameters() -> None:
     from mmg_casadi.params import markdown_table
-    _write(GENERATED / "parameters.md", markdown_table() + "\n")
+    _write(GENERATED / "parameters.md", "\n".join(escape_cell_pipes(r) for r in markdown_table().splitlines()) + "\n")
+
+
+def escape_cell_pipes(row: str) -> str:
+    """A Markdown table row whose cells may contain ``|`` (e.g. ``|γ|``), with those escaped as ``\\|``.
+
+    Cells are separated by `` | `` (spaces both sides); a ``|`` inside a cell text is not.
+
+    >>> escape_cell_pipes("| `a` | largest |γ| at | b |")
+    '| `a` | largest \\\\|γ\\\\| at | b |'
+    """
+    inner = row.strip()[2:-2] if row.startswith("| ") and row.endswith(" |") else None
+    if inner is None:
+        return row
+    return "| " + " | ".join(c.replace("|", "\\|") for c in inner.split(" | ")) + " |"
 
 
 def write_flat_api() -> None:
