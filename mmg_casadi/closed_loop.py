@@ -40,6 +40,7 @@ from .model import NX, build_mmg, propeller_rpm_for_speed, rk4
 from .params import PARAMETERS, resolve
 from .ship import ShipParams, SteeringParams, load_kcs, load_steering
 
+#: Names of one ship's rows of the scenario state, in order (see the comments for each row).
 SHIP_STATE = (
     "u", "v", "r", "x", "y", "psi", "delta",  # MMG state
     "y_int",        # ILOS integrator state

@@ -37,6 +37,7 @@ import numpy as np
 from .errors import InputError, ParameterError, check_range
 
 TWO_PI = 2.0 * math.pi
+#: COLREG situations from one ship's side (``encounter`` in the metrics).
 ENCOUNTERS = ("overtaking", "overtaken", "head-on", "crossing-give-way", "crossing-stand-on", "none")
 
 

@@ -31,13 +31,13 @@ steers the heading ``psi_d = chi_d - beta_c`` (Fossen, Pettersen & Galeazzi 2015
 
 **Wind.** The force on the above-water body follows Blendermann's parametric model (Blendermann 1994,
 J. Wind Eng. Ind. Aerodyn. 51:339-351), in the form of Fossen (2021), §10.1.2, with the relative wind angle
-``gamma = -atan2(v_rw, u_rw)`` (0 = wind on the bow, +pi/2 = wind from port) and relative wind speed ``V_rw``:
+``gamma = -atan2(v_rw, u_rw)`` (0 = wind on the bow, +pi/2 = wind from port) and relative wind speed ``V_rw``::
 
     C_X = -CD_lAF(gamma) cos(gamma) / D,   C_Y = CD_t sin(gamma) / D,
     C_N = (s_L/L_oa - 0.18 (|gamma| - pi/2)) C_Y,   D = 1 - (delta/2) (1 - CD_l/CD_t) sin^2(2 gamma),
     X = q A_F C_X,  Y = q A_L C_Y,  N = q A_L L_oa C_N,   q = rho_a V_rw^2 / 2,   CD_l = CD_lAF A_F / A_L,
 
-``CD_lAF`` switching from its head-wind to its tail-wind value at |gamma| = pi/2. The ``|gamma|`` in C_N makes
+``CD_lAF`` switching from its head-wind to its tail-wind value at ``|gamma| = pi/2``. The ``|gamma|`` in C_N makes
 the published formula (given for 0 <= gamma <= pi) odd in gamma, as the port/starboard mirror image demands.
 The apparent wind is the true wind relative to the ship's GROUND velocity (Fossen 2021, §10.1):
 ``u_rw = u_g - u_w``, ``v_rw = v_g - v_w`` with ``(u_w, v_w)`` the wind velocity in body axes.

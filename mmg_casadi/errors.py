@@ -36,11 +36,23 @@ class InputError(ValueError):
 
 
 class ParameterError(InputError):
-    """A model, guidance or field parameter outside its allowed range."""
+    """A model, guidance or field parameter outside its allowed range.
+
+    Parameters
+    ----------
+    field, allowed, got
+        As for :class:`InputError`.
+    """
 
 
 class ScenarioError(InputError):
-    """A malformed or inconsistent scenario file."""
+    """A malformed or inconsistent scenario file.
+
+    Parameters
+    ----------
+    field, allowed, got
+        As for :class:`InputError`.
+    """
 
 
 def check_range(field: str, value, low=None, high=None, *, low_open=False, high_open=False,

@@ -78,7 +78,7 @@ class ModifiedVortexParams:
     (L²/unit time, any real; the paper uses −10); ``r_safe``: detection radius R_safe, also the distance scale
     of the factor f (L, > 0); ``r_tol``: distance in the tangential-velocity threshold −2 R_tol v_r / d (L, ≥ 0).
     The paper writes R_tol there, but its laboratory code used the collision distance, 2 L, not the 3 L
-    waypoint tolerance; 2 L is the default. ``gamma_max``: largest |γ| for which the vortex acts (rad,
+    waypoint tolerance; 2 L is the default. ``gamma_max``: largest ``|γ|`` for which the vortex acts (rad,
     (0, π]); 5π/8 leaves the 112.5° stern sector (overtaking, stand-on) without vortex.
     """
 

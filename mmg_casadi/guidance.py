@@ -121,7 +121,7 @@ def ilos_heading(pi_p, y_e, y_int, delta, k):
 def ilos_integrator_rate(y_e, y_int, delta, k):
     """Rate of the ILOS integral state, ẏ_int = Δ y_e / (Δ² + (y_e + k y_int)²).
 
-    |ẏ_int| ≤ |y_e|/Δ, so y_int stays bounded whenever ∫|y_e| dt is.
+    ``|ẏ_int| ≤ |y_e|/Δ``, so y_int stays bounded whenever ``∫|y_e| dt`` is.
 
     Examples
     --------

@@ -22,6 +22,7 @@ from .actuator import steering_rate
 from .environment import NENV, Windage, current_kinematics, ground_velocity, wind_forces
 from .ship import ShipParams, SteeringParams, load_kcs, load_steering
 
+#: The MMG state vector: surge, sway, yaw rate, position, heading, rudder angle (prime-II, rad).
 STATE_NAMES = ("u", "v", "r", "x", "y", "psi", "delta")
 INPUT_NAMES = ("delta_c", "n_rpm")
 NX = len(STATE_NAMES)

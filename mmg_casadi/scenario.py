@@ -474,8 +474,11 @@ def load_scenario(path) -> Scenario:
     path : str or Path
         The file (see the module docstring for its keys).
 
-    A missing or unreadable file raises a :class:`ScenarioError` whose field is the path, a TOML syntax error
-    one whose field is ``"toml"`` and whose message carries the parser's message.
+    Raises
+    ------
+    ScenarioError
+        A missing or unreadable file: its field is the path; a TOML syntax error: its field is ``"toml"`` and
+        its message carries the parser's message.
 
     Examples
     --------

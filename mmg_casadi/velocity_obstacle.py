@@ -78,7 +78,7 @@ def velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *,
 
     Returns a dict: ``headings`` (1×n, θ_j), ``forbidden`` (M×n, 1 where neighbour i forbids candidate j),
     ``feasible`` (1×n), ``penetration`` (1×n, max_i (α_i − angle_ij) over the neighbours forbidding j, −π when
-    none does), ``cost`` (1×n, |wrap(θ_j − θ_goal)| plus the tie-break term), ``half_angle`` (1×M, α_i) and
+    none does), ``cost`` (1×n, ``|wrap(θ_j − θ_goal)|`` plus the tie-break term), ``half_angle`` (1×M, α_i) and
     ``goal_heading`` (θ_goal).
 
     Examples
@@ -137,10 +137,10 @@ def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, colli
     wins exact ties); with no feasible candidate, the one with the smallest penetration (see the module notes).
 
     Implementation: the cone test angle(w, l) < α is evaluated without trigonometry on the symbols, as
-    sin(α)·(w·l) − cos(α)·|w × l| > 0 (the sign of |w||l| sin(α − angle)), with sin α and cos α from the cone
-    formula algebraically and w·l, w × l linear in the numeric candidate directions. Only when no candidate is
+    ``sin(α)·(w·l) − cos(α)·|w × l| > 0`` (the sign of ``|w||l| sin(α − angle)``), with sin α and cos α from the
+    cone formula algebraically and w·l, w × l linear in the numeric candidate directions. Only when no candidate is
     feasible, or in the degenerate cases where that test might not be the same decision (an active neighbour
-    within R_MIN of the own position, e.g. exactly on it, or |own speed − neighbour speed| ≤ 1e-5 so that some w
+    within R_MIN of the own position, e.g. exactly on it, or ``|own speed − neighbour speed| ≤ 1e-5`` so that some w
     may be ~0), the direct implementation (the one this replaces) is evaluated — inside a conditional
     (``Function.conditional``) called as a never-inlined node, so it costs nothing otherwise. The whole guidance
     is itself a never-inlined Function per (neighbour count, candidates, cone), so a closed loop of many ships

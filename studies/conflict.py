@@ -10,5 +10,20 @@ from ._common import APF_AND_VO, run_cases
 
 
 def run(out, *, methods=None, params=None) -> dict:
-    """Run the three-ship conflict for ``methods`` (default: the paper's APFs and the VO) with ``params``."""
+    """Run the three-ship conflict for ``methods`` (default: the paper's APFs and the VO) with ``params``.
+
+    Parameters
+    ----------
+    out : str or Path
+        Output directory: ``<case>/<method>/`` per run, ``<case>.png`` per case, ``metrics.json``.
+    methods : iterable of str, optional
+        Methods to compare (names in :data:`mmg_casadi.methods.METHODS`); default: the paper's APFs and the VO.
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`) for every run.
+
+    Returns
+    -------
+    dict
+        The resolved parameters and, per case and method, the metrics of :func:`mmg_casadi.run_scenario`.
+    """
     return run_cases(conflict_cases(), methods or APF_AND_VO, out, params, title="conflict")

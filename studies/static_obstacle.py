@@ -12,5 +12,20 @@ from ._common import ALL_METHODS, run_cases
 
 
 def run(out, *, methods=None, params=None) -> dict:
-    """Run the three static-obstacle cases for ``methods`` (default: every avoiding method) with ``params``."""
+    """Run the three static-obstacle cases for ``methods`` (default: every avoiding method) with ``params``.
+
+    Parameters
+    ----------
+    out : str or Path
+        Output directory: ``<case>/<method>/`` per run, ``<case>.png`` per case, ``metrics.json``.
+    methods : iterable of str, optional
+        Methods to compare (names in :data:`mmg_casadi.methods.METHODS`); default: every avoiding method.
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`) for every run.
+
+    Returns
+    -------
+    dict
+        The resolved parameters and, per case and method, the metrics of :func:`mmg_casadi.run_scenario`.
+    """
     return run_cases(static_obstacle_cases(), methods or ALL_METHODS, out, params, title="static obstacle")

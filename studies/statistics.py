@@ -19,8 +19,37 @@ from mmg_casadi.montecarlo import DEFAULT_METHODS, run_study
 
 def run(out, *, runs: int = 200, envs="1-5", methods=None, base_seed: int = 0, params=None,
         backend: str = "local", address=None, workers=None, current=None, wind=None) -> dict:
-    """Run the study (see :func:`mmg_casadi.montecarlo.run_study`, also for the per-run ``current`` and ``wind``
-    speed ranges); returns the config, parameters and summary."""
+    """Run the study (see :func:`mmg_casadi.montecarlo.run_study`); returns the config, parameters and summary.
+
+    Parameters
+    ----------
+    out : str or Path
+        Output directory (``runs.csv``, ``summary.md``, ``statistics.png``, ...; a study there is resumed).
+    runs : int
+        Runs per environment and method.
+    envs : str or iterable of int
+        Environments, e.g. ``"1-5"`` or ``(1, 3)``.
+    methods : iterable of str, optional
+        Methods (default: :data:`mmg_casadi.montecarlo.DEFAULT_METHODS`).
+    base_seed : int
+        Base seed of the scenario sampler.
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`) for every run.
+    backend : {"local", "ray"}
+        Local process pool or a Ray cluster.
+    address : str, optional
+        Ray cluster address (backend ``"ray"``).
+    workers : int, optional
+        Local worker processes / CPUs of a new local Ray cluster.
+    current, wind : tuple of float, optional
+        Ranges ``(low, high)`` of the per-run current speed (fraction of U) and wind speed (m/s), sampled
+        uniformly with a uniform direction (calm water when omitted).
+
+    Returns
+    -------
+    dict
+        The contents of ``out/metrics.json``.
+    """
     out = Path(out)
     summary = run_study(out, runs=runs, envs=envs, methods=methods or DEFAULT_METHODS, base_seed=base_seed,
                         params=params, backend=backend, address=address, workers=workers, current=current,

@@ -19,7 +19,20 @@ PAPER = {"ce": 0.1203, "mcte": 0.2655}
 
 def run(out, *, params=None) -> dict:
     """Track the square with ``params`` (e.g. ``ilos_delta``, ``ilos_k``, ``kp``, ``kd``); write the figure and
-    ``metrics.json`` into ``out``."""
+    ``metrics.json`` into ``out``.
+
+    Parameters
+    ----------
+    out : str or Path
+        Output directory: ``waypoint_square.png``, the trajectory files and ``metrics.json``.
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`).
+
+    Returns
+    -------
+    dict
+        CE, MCTE, time to goal, the paper's values, the ILOS gains, the parameters and the run's metrics.
+    """
     res = run_scenario(waypoint_square(), params=params)
     out = Path(out)
     write_outputs(res, out, figure_name="waypoint_square.png", tracking=True)

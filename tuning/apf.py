@@ -42,7 +42,7 @@ Observations that shape the problem (see :func:`tune` and the report):
   (``TuningConfig.jit``) makes IPOPT 6.5x faster but its compilation (gcc -O1 of the functions and their
   derivatives) takes longer than the whole VM solve at the default sizes, so the VM is the default; see
   :data:`MEASURED`. Exact and finite-difference gradients agree to ~1e-7 (relative, central differences with
-  step 1e-6 |θ|); with step 1e-4 |θ| the R_safe component is off by ~7 % because the differences straddle
+  step ``1e-6 |θ|``); with step ``1e-4 |θ|`` the R_safe component is off by ~7 % because the differences straddle
   kinks of the loop (rudder saturation, goal reached), which the AD gradient does not see.
 """
 

@@ -42,6 +42,8 @@ def _finite(obj):
 def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None = None) -> dict:
     """Design, verify and plot; return (and write to ``out/metrics.json``) the metrics.
 
+    Non-finite numbers are written as null.
+
     Parameters
     ----------
     out : str or Path
@@ -52,8 +54,6 @@ def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None 
         Damping ratio (default 0.8).
     wn : float, optional
         Natural frequency (U/L; default: the rule of :mod:`tuning.pd`).
-
-    Non-finite numbers are written as null.
     """
     speed, zeta, wn, out = _validate(out, speed, zeta, wn)
     design = design_pd(speed, PdSpec(zeta=zeta, wn=wn))

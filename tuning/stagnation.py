@@ -38,7 +38,15 @@ FIELDS = tuple(_DEFAULTS)
 
 
 def field_params(field: str, **params) -> dict:
-    """Defaults of ``field`` updated with ``params`` (unknown names raise :class:`InputError`)."""
+    """Defaults of ``field`` updated with ``params`` (unknown names raise :class:`InputError`).
+
+    Parameters
+    ----------
+    field : {"inverse-square", "sink-vortex", "modified-vortex"}
+        The field.
+    **params
+        Overrides of its parameters by name (the keys of the returned dict).
+    """
     if field not in FIELDS:
         raise InputError("field", f"one of: {', '.join(FIELDS)}", field)
     out = dict(_DEFAULTS[field])
@@ -53,7 +61,19 @@ def field_function(field: str = "inverse-square", goal=(10.0, 0.0), obstacle=(-1
                    **params) -> ca.Function:
     """CasADi Function ``V(pos)`` (2-vector in, 2-vector out) of ``field`` with one obstacle at ``obstacle``
     (radius ``radius``, always active) and the goal at ``goal``. Map it over a grid with
-    ``F.map(n)(np.vstack([X.ravel(), Y.ravel()]))``."""
+    ``F.map(n)(np.vstack([X.ravel(), Y.ravel()]))``.
+
+    Parameters
+    ----------
+    field : {"inverse-square", "sink-vortex", "modified-vortex"}
+        The field.
+    goal, obstacle : (float, float)
+        Goal and obstacle centre (L).
+    radius : float
+        Obstacle radius (L; used by the inverse-square field).
+    **params
+        Field parameters overriding the defaults (:func:`field_params`).
+    """
     prm = field_params(field, **params)
     pos = ca.SX.sym("pos", 2)
     goal = ca.DM(np.asarray(goal, float).reshape(2, 1))
@@ -75,8 +95,23 @@ def stagnation_point(field: str = "inverse-square", goal=(10.0, 0.0), obstacle=(
                      *, radius: float = 0.5, tol: float = 1e-9, **params) -> np.ndarray:
     """Stagnation point (L) of ``field`` nearest (in Newton's sense) to ``guess``: a root of V(pos) = 0 found
     with ``ca.rootfinder(..., "newton", ...)``. ``params`` override the field's defaults (see
-    :func:`field_params`). Raises ``RuntimeError`` if Newton does not converge to |V| < ``tol`` · |V(guess)|
-    within 10 (|goal − obstacle| + |guess − obstacle|) of the obstacle (the fields vanish at infinity).
+    :func:`field_params`). Raises ``RuntimeError`` if Newton does not converge to ``|V| < tol · |V(guess)|``
+    within ``10 (|goal − obstacle| + |guess − obstacle|)`` of the obstacle (the fields vanish at infinity).
+
+    Parameters
+    ----------
+    field : {"inverse-square", "sink-vortex", "modified-vortex"}
+        The field.
+    goal, obstacle : (float, float)
+        Goal and obstacle centre (L).
+    guess : (float, float)
+        Initial guess of Newton's method (L).
+    radius : float
+        Obstacle radius (L).
+    tol : float
+        Accepted residual relative to ``|V(guess)|``.
+    **params
+        Field parameters overriding the defaults (:func:`field_params`).
 
     Examples
     --------
@@ -104,5 +139,11 @@ def stagnation_point(field: str = "inverse-square", goal=(10.0, 0.0), obstacle=(
 
 
 def distance_from_obstacle(point, obstacle=(-10.0, 0.0)) -> float:
-    """Distance (L) of ``point`` from the obstacle centre."""
+    """Distance (L) of ``point`` from the obstacle centre.
+
+    Parameters
+    ----------
+    point, obstacle : (float, float)
+        The two positions (L).
+    """
     return float(np.hypot(*(np.asarray(point, float) - np.asarray(obstacle, float))))
