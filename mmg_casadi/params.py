@@ -313,7 +313,8 @@ def _is_real(v) -> bool:
 
 
 def markdown_table() -> str:
-    """The table as Markdown (name, default, allowed, unit, meaning, source), grouped as in :data:`GROUPS`.
+    """The table as Markdown (name, default, allowed, unit, meaning, source), grouped as in :data:`GROUPS`;
+    a ``|`` inside a cell is escaped as ``\\|``.
 
     Examples
     --------
@@ -325,7 +326,8 @@ def markdown_table() -> str:
         for n in group(g):
             p = PARAMETERS[n]
             allowed = p.allowed().removeprefix("a number in ").removeprefix("one of: ")
-            rows.append(f"| `{n}` | {p.default} | {allowed} | {p.meaning} | {p.source} |")
+            cells = (str(p.default), allowed, p.meaning, p.source)
+            rows.append(f"| `{n}` | " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
     return "\n".join(rows)
 
 

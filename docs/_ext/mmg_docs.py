@@ -52,22 +52,7 @@ def _write(path: Path, text: str) -> None:
 
 def write_parameters() -> None:
     from mmg_casadi.params import markdown_table
-    rows = [escape_cell_pipes(r) for r in markdown_table().splitlines()]
-    _write(GENERATED / "parameters.md", "\n".join(rows) + "\n")
-
-
-def escape_cell_pipes(row: str) -> str:
-    """A Markdown table row whose cells may contain ``|`` (e.g. ``|γ|``), with those escaped as ``\\|``.
-
-    Cells are separated by `` | `` (spaces both sides); a ``|`` inside a cell text is not.
-
-    >>> escape_cell_pipes("| `a` | largest |γ| at | b |")
-    '| `a` | largest \\\\|γ\\\\| at | b |'
-    """
-    inner = row.strip()[2:-2] if row.startswith("| ") and row.endswith(" |") else None
-    if inner is None:
-        return row
-    return "| " + " | ".join(c.replace("|", "\\|") for c in inner.split(" | ")) + " |"
+    _write(GENERATED / "parameters.md", markdown_table() + "\n")
 
 
 def write_flat_api() -> None:
