@@ -24,7 +24,7 @@ from .io import write_json
 from .params import PARAMETERS, check_value, help_text, load_file, markdown_table
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
-STUDIES = QUICK_STUDIES + ("disturbance", "statistics", "all")
+STUDIES = QUICK_STUDIES + ("imazu", "disturbance", "statistics", "all")
 _FLAGS = {"base_seed": "--seed", "out_dir": "--out"}
 """Library argument names whose flag is not ``--`` + the name with dashes."""
 
@@ -118,6 +118,9 @@ def build_parser() -> argparse.ArgumentParser:
             for flag, key in (("--ilos-delta", "ilos_delta"), ("--ilos-k", "ilos_k"), ("--kp", "kp"),
                               ("--kd", "kd")):
                 sp.add_argument(flag, type=_float, dest=key, help=f"same as --set {key}=VALUE")
+        if name == "imazu":
+            sp.add_argument("--targets", default="both", help="hold | avoid | both: the targets hold course and "
+                            "speed, avoid with the own ship's method, or both in turn")
         if name == "disturbance":
             sp.add_argument("--current", type=_float, default=0.1, help="beam current speed (fraction of design "
                             "speed), default 0.1")
@@ -223,6 +226,8 @@ def _study(a) -> dict:
                       wind=a.wind and parse_range(a.wind, "wind"))
         if n == "disturbance":
             kw.update(current=a.current, wind=a.wind)
+        if n == "imazu":
+            kw.update(targets=a.targets)
         out[n] = mod.run(target, **kw)
     return out
 

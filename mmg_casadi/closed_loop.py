@@ -131,10 +131,18 @@ class Layout:
         return self.n_ships + self.n_obstacles
 
     @property
+    def method_inputs(self) -> tuple[str, ...]:
+        """Numeric step inputs of the methods this layout uses (:attr:`mmg_casadi.methods.Method.inputs`),
+        after the others in the parameter vector."""
+        used = set(self.methods)
+        return tuple(k for n, m in methods.METHODS.items() if n in used for k in m.inputs)
+
+    @property
     def np(self) -> int:
         """Rows of the parameter vector."""
         return (len(GLOBAL_PARAMS) + self.n_ships * (len(SHIP_PARAMS) + 2 * self.max_path)
-                + 3 * self.n_obstacles + 4 * self.n_walls + (len(ENV_INPUTS) if self.disturbed else 0))
+                + 3 * self.n_obstacles + 4 * self.n_walls + (len(ENV_INPUTS) if self.disturbed else 0)
+                + len(self.method_inputs))
 
     def key(self) -> str:
         """Short identifier used in Function names."""
@@ -175,6 +183,9 @@ class Layout:
         if self.disturbed:
             out["env"] = p[i:i + len(ENV_INPUTS)]
             i += len(ENV_INPUTS)
+        for name in self.method_inputs:
+            out[name] = p[i]
+            i += 1
         assert i == self.np
         return out
 
@@ -203,6 +214,7 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
         if env is None or len(env) != len(ENV_INPUTS):
             raise ValueError(f"a disturbed layout needs env = {ENV_INPUTS}, got {env!r}")
         vals += [float(v) for v in env]
+    vals += [float(globals_[name]) for name in layout.method_inputs]
     p = np.array(vals)
     assert p.size == layout.np
     return p
@@ -412,7 +424,8 @@ def ship_rows(layout: Layout, X: np.ndarray) -> np.ndarray:
 
 
 def step_values(resolved: dict) -> dict:
-    """The step's numeric inputs (:data:`GLOBAL_PARAMS`) from a resolved parameter set (degrees to rad).
+    """The step's numeric inputs (:data:`GLOBAL_PARAMS` and every method's
+    :attr:`~mmg_casadi.methods.Method.inputs`) from a resolved parameter set (table angles in degrees to rad).
 
     Examples
     --------
@@ -424,6 +437,9 @@ def step_values(resolved: dict) -> dict:
     for name in GLOBAL_PARAMS:
         src = _DEG_INPUTS.get(name)
         out[name] = math.radians(float(resolved[src])) if src else float(resolved[name])
+    for m in methods.METHODS.values():
+        for name in m.inputs:
+            out[name] = math.radians(float(resolved[name + "_deg"])) if name not in resolved else float(resolved[name])
     return out
 
 

@@ -10,7 +10,7 @@ walls' field and steers along the sum while any neighbour is within R_safe (or a
 Examples
 --------
 >>> NAMES
-('inverse-square', 'sink-vortex', 'modified-vortex', 'velocity-obstacle', 'none')
+('inverse-square', 'sink-vortex', 'modified-vortex', 'velocity-obstacle', 'none', 'colregs-vortex')
 >>> METHODS["modified-vortex"].groups
 ('sink-vortex', 'modified-vortex')
 """
@@ -20,9 +20,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
+import dataclasses
+
 import casadi as ca
 
-from . import fields, velocity_obstacle
+from . import colregs_vortex, fields, velocity_obstacle
+from .colregs_vortex import ColregsVortexParams
 from .errors import InputError
 
 
@@ -76,12 +79,17 @@ class Method:
         Parameter groups (:data:`mmg_casadi.params.GROUPS`) the builder reads.
     source : str
         Where the method comes from.
+    inputs : tuple of str
+        Numeric step inputs only this method reads (names of :data:`GuidanceInputs.P`, table angles in rad
+        without the ``_deg`` suffix); they enter the compiled step only of layouts where a ship uses the method,
+        so adding a method leaves every other compiled closed loop unchanged.
     """
 
     name: str
     builder: Callable | None
     groups: tuple[str, ...]
     source: str
+    inputs: tuple[str, ...] = ()
 
 
 def _inverse_square(g: GuidanceInputs):
@@ -102,6 +110,17 @@ def _modified_vortex(g: GuidanceInputs):
                                   r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"], smooth=g.layout.smooth)
 
 
+_CV_FIELDS = tuple(f.name for f in dataclasses.fields(ColregsVortexParams))
+
+
+def _colregs_vortex(g: GuidanceInputs):
+    P = g.P
+    return colregs_vortex.colregs_vortex(
+        g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active, lam_sink=P["lam_sink"], k_vor0=P["k_vor0"],
+        r_safe=P["r_safe"], r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"],
+        **{k: P[f"cv_{k}"] for k in _CV_FIELDS})
+
+
 def _velocity_obstacle(g: GuidanceInputs):
     psi_vo = velocity_obstacle.velocity_obstacle(
         g.pos, g.speed, g.goal, g.nb_pos, g.nb_vel, g.active, collision_distance=g.P["collision_distance"],
@@ -117,6 +136,9 @@ METHODS: dict[str, Method] = {m.name: m for m in (
     Method("velocity-obstacle", _velocity_obstacle, ("velocity-obstacle",),
            "Huang et al. 2018 (Ocean Eng. 151), the paper's baseline"),
     Method("none", None, (), "ILOS waypoint tracking only (a ship that holds its course)"),
+    Method("colregs-vortex", _colregs_vortex, ("sink-vortex", "modified-vortex", "colregs-vortex"),
+           "ours: the modified vortex with COLREG Rules 8, 13 and 17 (mmg_casadi.colregs_vortex)",
+           inputs=tuple(f"cv_{k}" for k in _CV_FIELDS)),
 )}
 """Every method, by name."""
 
@@ -127,6 +149,9 @@ AVOIDING: tuple[str, ...] = tuple(n for n, m in METHODS.items() if m.builder is 
 """Methods that avoid collisions (all but ``"none"``)."""
 
 PAPER_STATISTICS: tuple[str, ...] = ("modified-vortex", "inverse-square", "velocity-obstacle")
+
+PAPER: tuple[str, ...] = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle")
+"""The methods of the paper (the studies' defaults compare these)."""
 """Methods compared by the paper's statistical analysis."""
 
 
@@ -140,7 +165,7 @@ def get(name, field: str = "method") -> Method:
     >>> get("vortex")
     Traceback (most recent call last):
     ...
-    mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, none, got 'vortex'
+    mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, none, colregs-vortex, got 'vortex'
     """
     if not isinstance(name, str) or name not in METHODS:
         raise InputError(field, f"one of: {', '.join(NAMES)}", name)

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 
 from .errors import InputError, ParameterError, check_range
 
-GROUPS = ("simulation", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "walls",
-          "velocity-obstacle", "outcome", "environment")
+GROUPS = ("simulation", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "colregs-vortex",
+          "walls", "velocity-obstacle", "outcome", "environment")
 """Parameter groups, in the order of the README table; a method's guidance uses its own group(s)."""
 
 
@@ -175,6 +175,37 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("gamma_max_deg", 112.5, 0.0, 180.0, "deg", "largest |relative bearing γ| at which the vortex acts",
        "COLREG Rule 13: the 112.5° that leaves the stern sector (22.5° abaft the beam) without vortex",
        "modified-vortex", low_open=True),
+    # colregs-vortex (the modified vortex plus Rules 8, 13 and 17; mmg_casadi.colregs_vortex)
+    _P("cv_theta_head_on_deg", 22.5, 0.0, 90.0, "deg", "head-on tolerance on the bearing and on the course "
+       "difference from reciprocal", "the paper laboratory's head-on sector 7π/8–9π/8 of relative heading",
+       "colregs-vortex", low_open=True, high_open=True),
+    _P("cv_d_cpa_act", 3.0, 0.0, None, "L", "the stand-on ship acts alone when its planned-course CPA distance is "
+       "below this (Rule 17(a)(ii))", "our choice: 1.5 × the 2 L collision distance, below the ≈ 4 L the modified "
+       "vortex's give-way action aims at", "colregs-vortex", low_open=True),
+    _P("cv_t_act", 7.0, 0.0, None, "L/U", "TCPA below which the stand-on ship acts alone (Rule 17(a)(ii))",
+       "our choice: ≈ 2.2 min for the KCS, twice a give-way ship's time to alter 30° after entering R_safe",
+       "colregs-vortex", low_open=True),
+    _P("cv_r_act", 8.0, 0.0, None, "L", "range below which the stand-on ship acts alone whatever the TCPA (slowly "
+       "closing overtakers)", "our choice: 4 collision distances", "colregs-vortex", low_open=True),
+    _P("cv_t_close", 3.0, 0.0, None, "L/U", "TCPA at which the stand-on action reaches full strength (Rule 17(b))",
+       "our choice: about the KCS's 90° turn time with full rudder", "colregs-vortex", low_open=True),
+    _P("cv_k_standon", 1.0, 0.0, None, "L/(L/U)", "strength of the stand-on escape term at the trigger",
+       "our choice: the paper's sink (Λ = −100) at the 15 L detection range", "colregs-vortex", low_open=True),
+    _P("cv_dpsi_min_deg", 30.0, 0.0, 90.0, "deg", "smallest alteration from the goal bearing while a threat is "
+       "present (Rule 8, readily apparent)", "NTNU evaluator's Δχ_app (Hagen et al. 2023 configuration)",
+       "colregs-vortex"),
+    _P("cv_d_clear", 6.0, 0.0, None, "L", "a give-way ship holds its alteration until the planned-course passing "
+       "distance exceeds this", "our choice: 3 collision distances", "colregs-vortex", low_open=True),
+    _P("cv_v_ship_min", 0.05, 0.0, None, "U", "slower neighbours are static obstacles without a COLREG role",
+       "our choice: below the slowest ship speed a scenario allows (0.2)", "colregs-vortex", low_open=True),
+    _P("cv_r_guard", 5.0, 0.0, None, "L", "range inside which every neighbour also repels radially (last resort)",
+       "our choice: about the KCS's advance in a 90° turn plus the collision distance", "colregs-vortex",
+       low_open=True),
+    _P("cv_lam_guard", 15.0, 0.0, None, "L²/(L/U)", "strength of that radial repulsion λ (1/d − 1/r_guard)",
+       "our choice: 2 at 3 L, about twice the capped sink", "colregs-vortex"),
+    _P("cv_d_att_floor", 15.0, 0.0, None, "L", "while anything is avoided the goal attracts at most as from this "
+       "distance (the paper's near-goal failure)", "our choice: R_safe, the range at which avoidance starts",
+       "colregs-vortex"),
     # channel walls
     _P("wall_lam", 10.0, 0.0, None, "L²/(L/U)", "line-source strength of a channel wall",
        "paper §Narrow Waterways (Λ = 10)", "walls"),

@@ -1,0 +1,178 @@
+"""colregs-vortex: Rule 17 stand-on behaviour, Rule 8, the near-goal fix, and its closed loop."""
+
+import math
+from importlib.resources import files
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from mmg_casadi.closed_loop import default_globals
+from mmg_casadi.colregs_vortex import ColregsVortexParams, colregs_vortex, colregs_vortex_terms
+from mmg_casadi.errors import ParameterError
+from mmg_casadi.fields import heading_of, modified_vortex
+from mmg_casadi.scenario import load_scenario, scenario_from_dict, with_method
+from mmg_casadi.scenario_run import run_scenario
+
+CV = ColregsVortexParams()
+MV_KW = dict(lam_sink=-100.0, k_vor0=-10.0, r_safe=15.0, r_tol=2.0, gamma_max=5 * math.pi / 8)
+KW = MV_KW | CV.as_dict()
+OWN = dict(own_pos=[0.0, 0.0], own_psi=0.0, own_vel=[1.0, 0.0])
+FAR_GOAL = [50.0, 0.0]
+
+
+def heading(goal, nb_pos, nb_vel, method="colregs"):
+    """Desired heading (deg) of the own ship at the origin heading north at the design speed."""
+    nb_pos, nb_vel = ca.DM(nb_pos).reshape((2, -1)), ca.DM(nb_vel).reshape((2, -1))
+    ones = [1.0] * nb_pos.size2()
+    if method == "colregs":
+        v = colregs_vortex(goal=goal, nb_pos=nb_pos, nb_vel=nb_vel, active=ones, **OWN, **KW)
+    else:
+        v = modified_vortex(goal=goal, nb_pos=nb_pos, nb_vel=nb_vel, active=ones, **OWN, **MV_KW)
+    return math.degrees(float(heading_of(v)))
+
+
+def collision_course(course_deg, tcpa, offset=0.0):
+    """Position and velocity of a design-speed ship on course ``course_deg`` that meets the own ship (north at
+    speed 1 from the origin) after ``tcpa``, displaced by ``offset`` L across the relative velocity."""
+    c = math.radians(course_deg)
+    v_t = np.array([math.cos(c), math.sin(c)])
+    rel = v_t - [1.0, 0.0]
+    pos = -rel * tcpa + offset * np.array([-rel[1], rel[0]]) / np.linalg.norm(rel)
+    return pos, v_t
+
+
+def terms(nb_pos, nb_vel, goal=FAR_GOAL):
+    kw = {k: v for k, v in KW.items() if k != "lam_sink"}
+    return colregs_vortex_terms(goal=goal, nb_pos=ca.DM(nb_pos), nb_vel=ca.DM(nb_vel), **OWN, **kw)
+
+
+# --- Rule 17 -------------------------------------------------------------------------------------------------
+
+def test_stand_on_keeps_course_while_the_give_way_ship_still_has_time():
+    # crossing from port on a collision course, TCPA 10 > t_act and range 14 L > r_act: 17(a)(i), no deviation
+    pos, vel = collision_course(90.0, 10.0)
+    assert pos[1] < 0 and math.hypot(*pos) > CV.r_act
+    assert heading(FAR_GOAL, pos, vel) == pytest.approx(0.0, abs=1e-9)
+    # the paper's modified vortex acts on the same ship (the behaviour this method changes)
+    assert heading(FAR_GOAL, pos, vel, method="modified") > 1.0
+
+
+def test_stand_on_acts_alone_below_the_trigger_turning_to_starboard():
+    pos, vel = collision_course(90.0, 6.0)  # TCPA below t_act, CPA 0 < d_cpa_act: 17(a)(ii)
+    t = terms(pos, vel)
+    assert int(t["stand_on"]) == 1 and int(t["act_alone"]) == 1
+    assert heading(FAR_GOAL, pos, vel) >= math.degrees(CV.dpsi_min) - 1e-9
+
+
+def test_stand_on_does_not_act_when_the_cpa_is_already_safe():
+    pos, vel = collision_course(90.0, 6.0, offset=CV.d_cpa_act + 2.0)
+    t = terms(pos, vel)
+    assert int(t["stand_on"]) == 1 and int(t["act_alone"]) == 0
+    assert float(t["dcpa"]) == pytest.approx(CV.d_cpa_act + 2.0, rel=1e-9)
+    assert heading(FAR_GOAL, pos, vel) == pytest.approx(0.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("course", [30.0, 60.0, 90.0, 120.0, 150.0])
+@pytest.mark.parametrize("tcpa", [1.5, 3.0, 5.0])
+def test_stand_on_never_turns_to_port_for_a_ship_crossing_from_port(course, tcpa):
+    pos, vel = collision_course(course, tcpa)  # 17(c)
+    assert pos[1] < 0
+    assert int(terms(pos, vel)["act_alone"]) == 1
+    assert heading(FAR_GOAL, pos, vel) > 0.0
+
+
+@pytest.mark.parametrize("side, turn", [(+0.5, -1), (-0.5, +1)])
+def test_overtaken_ship_acts_for_an_overtaker_closing_from_astern(side, turn):
+    # a faster ship 5 L astern, about to pass 0.5 L off: the modified vortex ignores the stern sector; here the
+    # own ship turns away from the side the overtaker passes on, by more than the Rule 8 minimum
+    pos, vel = [-5.0, side], [1.6, 0.0]
+    assert heading(FAR_GOAL, pos, vel, method="modified") == pytest.approx(0.0, abs=1e-9)
+    t = terms(pos, vel)
+    assert int(t["stand_on"]) == 1 and int(t["act_alone"]) == 1
+    assert turn * heading(FAR_GOAL, pos, vel) > math.degrees(CV.dpsi_min)
+
+
+def test_overtaker_far_astern_is_left_alone():
+    assert heading(FAR_GOAL, [-12.0, 0.5], [1.6, 0.0]) == pytest.approx(0.0, abs=1e-9)  # TCPA 20, 12 L
+
+
+# --- Rule 8, near goal, roles --------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("rng", [14.0, 10.0])
+def test_head_on_give_way_alteration_is_to_starboard_and_readily_apparent(rng):
+    h = heading(FAR_GOAL, [rng, 0.0], [-1.0, 0.0])
+    assert h >= math.degrees(CV.dpsi_min) - 1e-9
+    assert h >= heading(FAR_GOAL, [rng, 0.0], [-1.0, 0.0], method="modified") - 1e-9
+
+
+def test_near_the_goal_avoidance_wins_over_the_goal():
+    # goal 6 L ahead, a ship from starboard on a collision course 4 time units away
+    pos, vel = collision_course(-90.0, 4.0)
+    goal = [6.0, 0.0]
+    h_cv = heading(goal, pos, vel)
+    assert h_cv >= math.degrees(CV.dpsi_min) - 1e-9
+    assert h_cv > heading(goal, pos, vel, method="modified") + 10.0
+
+
+def test_static_obstacle_near_the_goal_is_passed_wider():
+    goal, obstacle = [8.0, 0.0], [5.0, -0.3]
+    t = terms(obstacle, [0.0, 0.0], goal=goal)
+    assert int(t["ship"]) == 0 and int(t["stand_on"]) == 0 and float(t["k_vor"]) < 0
+    h_cv, h_mv = heading(goal, obstacle, [0.0, 0.0]), heading(goal, obstacle, [0.0, 0.0], method="modified")
+    assert h_mv > 0 and h_cv > h_mv + 10.0
+
+
+def test_no_neighbours_means_straight_to_the_goal():
+    v = colregs_vortex(goal=[3.0, 4.0], nb_pos=ca.DM(2, 0), nb_vel=ca.DM(2, 0), active=ca.DM(1, 0), **OWN, **KW)
+    assert float(heading_of(v)) == pytest.approx(math.atan2(4.0, 3.0))
+
+
+def test_symbolic_function_matches_numeric_call():
+    x = ca.SX.sym("x", 2)
+    nb = ca.SX.sym("nb", 2, 2)
+    nv = ca.SX.sym("nv", 2, 2)
+    f = ca.Function("cv", [x, nb, nv], [colregs_vortex(x, 0.3, [0.9, 0.2], FAR_GOAL, nb, nv, [1, 1], **KW)])
+    args = (ca.DM([1.0, -2.0]), ca.DM([[9.0, -4.0], [3.0, 1.0]]), ca.DM([[-1.0, 1.5], [0.0, 0.1]]))
+    np.testing.assert_allclose(np.array(f(*args)),
+                               np.array(colregs_vortex(args[0], 0.3, [0.9, 0.2], FAR_GOAL, args[1], args[2],
+                                                       [1, 1], **KW)), rtol=1e-12)
+
+
+@pytest.mark.parametrize("field, name, value, table_value", [
+    ("t_act", "cv_t_act", 0.0, 0.0), ("d_cpa_act", "cv_d_cpa_act", -1.0, -1.0),
+    ("dpsi_min", "cv_dpsi_min_deg", 2.0, math.degrees(2.0)),
+    ("theta_head_on", "cv_theta_head_on_deg", math.pi / 2, 90.0), ("lam_guard", "cv_lam_guard", -1.0, -1.0)])
+def test_parameters_are_range_checked(field, name, value, table_value):
+    # the dataclass holds rad, the parameter table (scenario files, --params, default_globals) degrees
+    with pytest.raises(ParameterError, match=name):
+        ColregsVortexParams(**{field: value})
+    with pytest.raises(ParameterError, match=name):
+        default_globals(**{name: table_value})
+
+
+# --- closed loop ---------------------------------------------------------------------------------------------
+
+def near_goal_head_on(method):
+    # the paper's second failure mechanism: the own ship 10 L from its goal when a ship holding course meets it
+    return scenario_from_dict({
+        "settings": {"method": method, "t_max": 120.0},
+        "ships": [{"name": "own", "start": [0, 0], "heading": 0, "speed": 1.0, "waypoints": [[20, 0]]},
+                  {"name": "other", "start": [34, 0], "heading": 180, "speed": 1.0, "waypoints": [[0, 0]],
+                   "method": "none"}]})
+
+
+def test_near_goal_meeting_ends_without_collision():
+    cv = run_scenario(near_goal_head_on("colregs-vortex")).metrics
+    assert not cv["collision"] and cv["ships"][0]["status"] == "reached"
+    # the same meeting defeats the paper's modified vortex
+    assert run_scenario(near_goal_head_on("modified-vortex")).metrics["collision"]
+
+
+@pytest.mark.parametrize("name", ["head_on", "crossing", "overtaking", "conflict", "static_obstacle",
+                                  "narrow_channel"])
+def test_paper_encounters_stay_collision_free(name):
+    sc = with_method(load_scenario(files("mmg_casadi") / "data" / "scenarios" / f"{name}.toml"), "colregs-vortex")
+    m = run_scenario(sc).metrics
+    assert not m["collision"]
+    assert all(s["status"] == "reached" for s in m["ships"])

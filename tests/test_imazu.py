@@ -1,0 +1,106 @@
+"""The 22 Imazu problems: geometry as published, valid scenario dicts, and colregs-vortex runs."""
+
+import math
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from mmg_casadi.errors import InputError
+from mmg_casadi.imazu import CASES, imazu_case, plot_imazu, run_imazu
+from mmg_casadi.scenario import scenario_from_dict
+
+# Imazu's problems as encoded in MarWaltz/TUD_RL tud_rl/envs/_envs/Imazu.py (after Sawada et al. 2021):
+# case -> number of targets; cases 1-4 have one target ship, 5-12 two, 13-22 three.
+N_TARGETS = {k: 1 if k <= 4 else 2 if k <= 12 else 3 for k in range(1, 23)}
+# the overtaken (slow) target ships, the first target of these cases in the source
+SLOW = {3, 7, 15, 17, 20, 22}
+
+
+def targets(k, mode="hold"):
+    return imazu_case(k, method="colregs-vortex", targets=mode)["ships"][1:]
+
+
+def test_twenty_two_cases_with_one_two_or_three_targets():
+    assert sorted(CASES) == list(range(1, 23))
+    assert {k: len(targets(k)) for k in CASES} == N_TARGETS
+
+
+@pytest.mark.parametrize("k", sorted(CASES))
+def test_every_ship_reaches_the_meeting_point_at_the_same_time(k):
+    # scaling: meeting point 40 L ahead of the own ship, reached at t = 40 by everybody holding course and speed
+    d = imazu_case(k, method="modified-vortex", targets="hold")
+    own = d["ships"][0]
+    assert own["start"] == [0.0, 0.0] and own["heading"] == 0.0 and own["speed"] == 1.0
+    for s in d["ships"]:
+        h = math.radians(s["heading"])
+        at_40 = np.array(s["start"]) + s["speed"] * 40.0 * np.array([math.cos(h), math.sin(h)])
+        np.testing.assert_allclose(at_40, [40.0, 0.0], atol=1e-9)
+        # goal straight ahead on the same course, past the meeting point
+        goal = np.array(s["waypoints"][-1])
+        assert np.dot(goal - [40.0, 0.0], [math.cos(h), math.sin(h)]) > 0
+        dx, dy = goal - np.array(s["start"])
+        assert abs(dx * math.sin(h) - dy * math.cos(h)) < 1e-9
+    speeds = [s["speed"] for s in d["ships"][1:]]
+    assert speeds == [0.5 if (k in SLOW and i == 0) else 1.0 for i in range(len(speeds))]
+
+
+def test_ranges_and_bearings_of_the_single_target_cases():
+    # case 1 head-on: dead ahead at 80 L; case 2 crossing from starboard: 45° on the starboard bow at 40√2 L;
+    # case 3 overtaking: the slow ship dead ahead at 20 L; case 4: on the port side, 45° course from the SW
+    expect = {1: (0.0, 80.0), 2: (45.0, 40 * math.sqrt(2)), 3: (0.0, 20.0),
+              4: (-67.5, 40 * math.sqrt(2 - math.sqrt(2)))}
+    for k, (bearing, rng) in expect.items():
+        (t,) = targets(k)
+        x, y = t["start"]
+        assert math.degrees(math.atan2(y, x)) == pytest.approx(bearing, abs=1e-6)
+        assert math.hypot(x, y) == pytest.approx(rng, rel=1e-9)
+
+
+@pytest.mark.parametrize("mode", ["hold", "avoid"])
+def test_all_cases_are_valid_scenarios_with_the_requested_target_method(mode):
+    for k in CASES:
+        d = imazu_case(k, method="velocity-obstacle", targets=mode)
+        sc = scenario_from_dict(d)
+        assert sc.settings.method == "velocity-obstacle"
+        assert [sc.method_of(i) for i in range(1, len(sc.ships))] == \
+            ["none" if mode == "hold" else "velocity-obstacle"] * N_TARGETS[k]
+
+
+@pytest.mark.parametrize("kw", [dict(k=0), dict(k=23), dict(k=True), dict(targets="give-way"),
+                                dict(method="apf")])
+def test_bad_arguments_raise_input_errors(kw):
+    args = dict(k=1, method="modified-vortex", targets="hold") | kw
+    with pytest.raises(InputError):
+        imazu_case(args.pop("k"), **args)
+
+
+# the cases where the modified vortex is the stand-on ship for a target from its port side that holds course
+@pytest.mark.parametrize("k", [4, 13, 16])
+def test_colregs_vortex_own_ship_is_safe_where_it_must_stand_on(k):
+    (row,) = run_imazu("colregs-vortex", "hold", cases=(k,))
+    assert row["safe"], row
+    assert row["min_distance"] > 2.0
+
+
+def test_imazu_figure_has_one_panel_per_case():
+    rows = run_imazu("colregs-vortex", "avoid", cases=(1, 2))
+    fig = plot_imazu(rows, title="two cases")
+    assert isinstance(fig, Figure)
+    titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
+    assert titles[0].startswith("case 1:") and titles[1].startswith("case 2:") and len(titles) == 2
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode", ["hold", "avoid"])
+def test_colregs_vortex_own_ship_safe_in_all_22_cases(mode):
+    rows = run_imazu("colregs-vortex", mode)
+    assert [r["case"] for r in rows if not r["safe"]] == []
+
+
+def test_study_imazu_cli_refuses_bad_targets_and_foreign_options(tmp_path, capsys):
+    from mmg_casadi.cli import main
+    assert main(["study", "imazu", "--targets", "drift", "--out", str(tmp_path / "a")]) == 2
+    assert "--targets" in capsys.readouterr().err and not (tmp_path / "a").exists()
+    assert main(["study", "imazu", "--runs", "5", "--out", str(tmp_path / "b")]) == 2
+    assert "--runs" in capsys.readouterr().err
