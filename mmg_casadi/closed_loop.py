@@ -305,6 +305,13 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
             active = ca.SX(1, 0)
 
         psi_ilos = terms["psi_d"]
+        if methods.get(method, f"methods[{i}]").goal_capture:
+            # past its final waypoint (missed outside the acceptance radius) the ship turns back to it instead of
+            # following the extended last leg for ever
+            past = ca.logic_and(Xi[S_["idx"]] > Pi["n_path"] - 1.5,
+                                terms["x_e"] > ca.norm_2(terms["wp_next"] - terms["wp_prev"]))
+            to_goal = terms["wp_next"] - pos[i]
+            psi_ilos = ca.if_else(past, ca.atan2(to_goal[1], to_goal[0]), psi_ilos)
         if layout.disturbed:  # optional crab-angle compensation: steer the course, psi_d = chi_d - beta
             u_g, v_g = environment.ground_velocity(Xi[S_["u"]], Xi[S_["v"]], psi[i], E[0], E[1])
             psi_ilos = psi_ilos - E[4] * environment.crab_angle(u_g, v_g)

@@ -83,6 +83,9 @@ class Method:
         Numeric step inputs only this method reads (names of :data:`GuidanceInputs.P`, table angles in rad
         without the ``_deg`` suffix); they enter the compiled step only of layouts where a ship uses the method,
         so adding a method leaves every other compiled closed loop unchanged.
+    goal_capture : bool
+        A ship that passed its final waypoint outside the acceptance radius turns back to it (the paper's ILOS
+        follows the extended last leg for ever; kept for the paper's methods).
     """
 
     name: str
@@ -90,6 +93,7 @@ class Method:
     groups: tuple[str, ...]
     source: str
     inputs: tuple[str, ...] = ()
+    goal_capture: bool = False
 
 
 def _inverse_square(g: GuidanceInputs):
@@ -138,7 +142,7 @@ METHODS: dict[str, Method] = {m.name: m for m in (
     Method("none", None, (), "ILOS waypoint tracking only (a ship that holds its course)"),
     Method("colregs-vortex", _colregs_vortex, ("sink-vortex", "modified-vortex", "colregs-vortex"),
            "ours: the modified vortex with COLREG Rules 8, 13 and 17 (mmg_casadi.colregs_vortex)",
-           inputs=tuple(f"cv_{k}" for k in _CV_FIELDS)),
+           inputs=tuple(f"cv_{k}" for k in _CV_FIELDS), goal_capture=True),
 )}
 """Every method, by name."""
 
