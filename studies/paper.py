@@ -214,7 +214,7 @@ def _success_better(comparisons, envs, better, worse) -> tuple[str, dict, dict]:
         sign = 1 if c["method_a"] == better else -1
         d = sign * c["difference"]
         lo, hi = sorted((sign * c["ci_low"], sign * c["ci_high"]))
-        measured[f"env{e}"] = {"difference_pp": _f(100 * d, 2), "p": _f(c["p_value"], 6)}
+        measured[f"env{e}"] = {"difference_pp": _f(100 * d, 2), "p": float(f"{c['p_value']:.3g}")}
         ci[f"env{e}"] = [_f(100 * lo, 2), _f(100 * hi, 2)]
         flags.append(d > 0)
         sig.append(d > 0 and c["p_value"] < 0.05)
