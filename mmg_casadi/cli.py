@@ -24,7 +24,7 @@ from .io import write_json
 from .params import PARAMETERS, check_value, help_text, load_file, markdown_table
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
-STUDIES = QUICK_STUDIES + ("imazu", "disturbance", "statistics", "all")
+STUDIES = QUICK_STUDIES + ("imazu", "disturbance", "statistics", "paper", "all")
 _FLAGS = {"base_seed": "--seed", "out_dir": "--out"}
 """Library argument names whose flag is not ``--`` + the name with dashes."""
 
@@ -109,11 +109,17 @@ def build_parser() -> argparse.ArgumentParser:
     studies = st.add_subparsers(dest="study", parser_class=_Parser, metavar="{" + ",".join(STUDIES) + "}")
     studies.required = True
     for name in STUDIES:
-        sp = studies.add_parser(name, help=f"the {name} study" if name != "all" else "every quick study")
+        sp = studies.add_parser(name, help={"all": "every quick study", "paper": "every study of the paper and "
+                                            "a claim-by-claim report"}.get(name, f"the {name} study"))
         sp.add_argument("--out", type=Path, required=True, help="output directory")
         _add_params(sp)
-        if name not in ("waypoint-square", "all"):
+        if name not in ("waypoint-square", "all", "paper"):
             _add_methods(sp)
+        if name == "paper":
+            sp.add_argument("--runs", type=_int, default=5000, help="runs per environment and method of the "
+                            "statistical analysis (the paper: 5000)")
+            sp.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
+            sp.add_argument("--workers", type=_int, default=None, help="local worker processes")
         if name == "waypoint-square":
             for flag, key in (("--ilos-delta", "ilos_delta"), ("--ilos-k", "ilos_k"), ("--kp", "kp"),
                               ("--kd", "kd")):
@@ -228,6 +234,8 @@ def _study(a) -> dict:
             kw.update(current=a.current, wind=a.wind)
         if n == "imazu":
             kw.update(targets=a.targets)
+        if n == "paper":
+            kw.update(runs=a.runs, base_seed=a.seed, workers=a.workers)
         out[n] = mod.run(target, **kw)
     return out
 

@@ -57,6 +57,7 @@ SHIP_STATE = (
     "t_best",       # when it was reached
     "x_best", "y_best",
     "reactive_time",  # time spent under reactive guidance
+    "vo_heading",   # heading chosen by the reactive method while a neighbour is within R_safe, else the heading
 )
 NS = len(SHIP_STATE)
 S_ = {name: i for i, name in enumerate(SHIP_STATE)}
@@ -100,6 +101,8 @@ class Layout:
         Candidate headings of the velocity obstacle.
     vo_cone : str
         ``"wide"`` or ``"huang"`` (see :mod:`mmg_casadi.velocity_obstacle`).
+    vo_hold : bool
+        The velocity obstacle keeps its chosen heading while it stays feasible (``vo_heading`` state).
     smooth : float or None
         ``None`` for the exact switching logic; a sharpness ``s > 0`` replaces every switch by a sigmoid of
         that sharpness (for gradient-based tuning).
@@ -114,6 +117,7 @@ class Layout:
     max_path: int = 2
     vo_candidates: int = PARAMETERS["vo_candidates"].default
     vo_cone: str = PARAMETERS["vo_cone"].default
+    vo_hold: bool = PARAMETERS["vo_hold"].default
     smooth: float | None = None
     disturbed: bool = False
 
@@ -151,7 +155,8 @@ class Layout:
             meth = f"{self.methods[0].replace('-', '')}x{self.n_ships}"
         s = "" if self.smooth is None else f"_s{self.smooth:g}".replace(".", "p")
         s += "_env" if self.disturbed else ""
-        return f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}{s}"
+        return (f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}"
+                f"{'h' if self.vo_hold else ''}{s}")
 
     def split_params(self, p):
         """Split a parameter vector (symbolic or numeric) into named pieces.
@@ -237,6 +242,7 @@ def initial_state(layout: Layout, ships: list[dict]) -> np.ndarray:
         goal = np.asarray(s["path"], float).reshape(-1, 2)[-1]
         row[S_["best_goal_dist"]] = float(np.hypot(*(goal - np.asarray(s["start"], float))))
         row[S_["x_best"]], row[S_["y_best"]] = s["start"]
+        row[S_["vo_heading"]] = float(s["heading"])
         x[1 + i * NS: 1 + (i + 1) * NS] = row
     return x
 
@@ -316,6 +322,7 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
             u_g, v_g = environment.ground_velocity(Xi[S_["u"]], Xi[S_["v"]], psi[i], E[0], E[1])
             psi_ilos = psi_ilos - E[4] * environment.crab_angle(u_g, v_g)
         spec = methods.get(method, f"methods[{i}]")
+        chosen = None  # heading chosen by the method while a neighbour is within R_safe
         if spec.builder is None or (M == 0 and W == 0):
             psi_d = psi_ilos
             w_react = ca.SX(0)
@@ -335,8 +342,11 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
             speed = ca.norm_2(vel[i]) if layout.disturbed else ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2)
             inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal,
                                     nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=active, P=P,
-                                    layout=layout)
-            field_vec = spec.builder(inputs) + wall_vec
+                                    layout=layout, held_heading=Xi[S_["vo_heading"]])
+            method_vec = spec.builder(inputs)
+            if M:
+                chosen = (any_active > 0.5, ca.atan2(method_vec[1], method_vec[0]))
+            field_vec = method_vec + wall_vec
             if sm is None:
                 psi_d = ca.if_else(w_react, ca.atan2(field_vec[1], field_vec[0]), psi_ilos)
             else:
@@ -379,6 +389,7 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
             ca.if_else(better, pos_next[0], Xi[S_["x_best"]]),
             ca.if_else(better, pos_next[1], Xi[S_["y_best"]]),
             Xi[S_["reactive_time"]] + w_react * dt,
+            xm_next[5] if chosen is None else ca.if_else(chosen[0], chosen[1], xm_next[5]),
         )
         x_next.append(ca.if_else(sailing[i], new, Xi))
         aux.append(ca.vertcat(delta_c, psi_d, terms["y_e"], w_react))
@@ -739,7 +750,7 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
     layout = Layout(methods=methods_, n_obstacles=len(sc.obstacles), n_walls=len(walls),
                     max_path=max(1 + len(s.waypoints) for s in sc.ships),
                     vo_candidates=resolved["vo_candidates"], vo_cone=resolved["vo_cone"],
-                    disturbed=is_disturbed(resolved))
+                    disturbed=is_disturbed(resolved), vo_hold=resolved["vo_hold"])
     model = ClosedLoopModel(layout, resolved)
     ships = tuple({"n_rpm": propeller_rpm_for_speed(s.speed), "path": [s.start, *s.waypoints], "stays": s.stays,
                    "start": s.start, "heading": math.radians(s.heading_deg), "speed": s.speed} for s in sc.ships)

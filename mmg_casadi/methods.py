@@ -50,6 +50,9 @@ class GuidanceInputs:
         The step's named numeric parameters (:data:`~mmg_casadi.closed_loop.GLOBAL_PARAMS`, angles in rad).
     layout : Layout
         The closed loop's shape (structural parameters such as the velocity obstacle's candidates and cone).
+    held_heading : SX, optional
+        The heading the method chose at the previous step while a neighbour was within R_safe, else the ship's
+        heading (state ``vo_heading``; rad).
     """
 
     pos: object
@@ -63,6 +66,7 @@ class GuidanceInputs:
     active: object
     P: dict
     layout: object
+    held_heading: object = None
 
 
 @dataclass(frozen=True)
@@ -126,9 +130,13 @@ def _colregs_vortex(g: GuidanceInputs):
 
 
 def _velocity_obstacle(g: GuidanceInputs):
+    D = g.P["collision_distance"]
     psi_vo = velocity_obstacle.velocity_obstacle(
-        g.pos, g.speed, g.goal, g.nb_pos, g.nb_vel, g.active, collision_distance=g.P["collision_distance"],
+        g.pos, g.speed, g.goal, g.nb_pos, g.nb_vel, g.active, collision_distance=D,
         n_candidates=g.layout.vo_candidates, cone=g.layout.vo_cone)
+    if g.layout.vo_hold and g.held_heading is not None:
+        psi_vo = velocity_obstacle.hold_heading(psi_vo, g.held_heading, g.pos, g.speed, g.nb_pos, g.nb_vel,
+                                                g.active, collision_distance=D, cone=g.layout.vo_cone)
     return ca.vertcat(ca.cos(psi_vo), ca.sin(psi_vo))
 
 

@@ -36,6 +36,19 @@ Outcome of a run (own ship = agent 0, judged from the final state):
     ``failure_time`` the time of its closest approach to the goal), ``"timeout"`` (otherwise;
     ``failure_time`` = end time); ``""`` on success.
 
+``failure_mechanism``
+    why a failed run failed, one of :data:`mmg_casadi.failures.MECHANISMS` (``""`` on success): started too
+    close, obstacle near the goal, near-goal, ship–ship, obstacle, stalled, timeout, diverged (see there).
+``colregs_compliant``, ``colregs_encounters``
+    whether the own ship kept the COLREGs (profile ``iitm-lab``) in all of its classified encounters with other
+    ships, and how many there were (:func:`mmg_casadi.compliance.own_ship_compliance`, empty without one); judged
+    on a history of positions and headings kept every :data:`HISTORY_EVERY` guidance steps by
+    :func:`~mmg_casadi.simulation.simulate_batch_history`.
+
+The summary adds the compliance rate per cell (Wilson 95 % interval over the runs with an encounter) and the
+failure counts per mechanism; ``comparisons.csv`` holds the paired comparison of every two methods per
+environment (:mod:`mmg_casadi.comparisons`).
+
 Outcome, CE and MCTE are judged by :meth:`mmg_casadi.closed_loop.ClosedLoopModel.outcomes`, as for a single
 scenario run (a diverged ship's CE/MCTE are ``nan``; summaries average them over successful runs only). Every
 run uses the same resolved parameter set (``params`` of :func:`run_study`: the table's defaults with the
@@ -89,7 +102,7 @@ DEFAULT_BATCH = 128
 """Runs per task (the unit of resumption): ≥ ~1 s of compiled work even for the lightest cell; inside a task
 :func:`~mmg_casadi.simulation.simulate_batch` steps ``DEFAULT_WIDTH`` runs side by side and refills finished
 columns with waiting runs."""
-DEFAULT_CHUNK = 25
+DEFAULT_CHUNK = 24
 """Steps per ``mapaccum`` chunk (the rollout stops after the chunk in which every run has finished)."""
 MAX_FAILURE_FILES = 20
 """Replayable scenario files written per (environment, method) cell."""
@@ -232,13 +245,52 @@ def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: flo
     return 1e6 * elapsed / (repeats * n * layout.n_ships)
 
 
+HISTORY_EVERY = 2
+"""The batch rollout keeps every 2nd guidance step (0.5 L/U) of positions and headings for the COLREG scoring."""
+
+
+def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
+    """``failure_mechanism``, ``colregs_compliant`` and ``colregs_encounters`` of one run.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The run's scenario (goals, obstacles).
+    model : ClosedLoopModel
+        Its closed loop (layout, resolved parameters).
+    x_final : array (nx,)
+        Final scenario state.
+    t, states : array (K,), (K, N, 4)
+        Decimated history (:meth:`mmg_casadi.simulation.BatchHistory.column`).
+    """
+    from .compliance import own_ship_compliance
+    from .failures import failure_mechanism, turn_time_90
+    P = model.params
+    row = classify(model, x_final)
+    own = model.outcomes(x_final)[0]
+    goals = np.array([s.waypoints[-1] for s in scenario.ships], float)
+    obstacles = np.array([o.position for o in scenario.obstacles], float).reshape(-1, 2)
+    at = None
+    if own["collision_time"] is not None and len(t) > 1:
+        at = np.column_stack([np.interp(own["collision_time"], t, states[:, :, c][:, i])
+                              for i in range(states.shape[1]) for c in (0, 1)]).reshape(-1, 2)
+    mech = failure_mechanism(row["failure"], collision_time=own["collision_time"],
+                             collision_with=own["collision_with"], goals=goals, obstacles=obstacles,
+                             positions_at_collision=at, turn_time=turn_time_90(float(P["delta_max_deg"])),
+                             near_goal_distance=float(P["near_goal_distance"]))
+    compliant, n = own_ship_compliance(t, states, r_safe=float(P["r_safe"]),
+                                       collision_distance=float(P["collision_distance"]))
+    return {"failure_mechanism": mech, "colregs_compliant": compliant, "colregs_encounters": n}
+
+
 def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT_CHUNK,
-                  time_guidance_calls: bool = True) -> list[dict]:
+                  time_guidance_calls: bool = True, explain: bool = True) -> list[dict]:
     """Simulate scenarios together and classify each from its final state.
 
     Scenarios with the same :class:`Layout` are rolled out as one batch (one compiled step, ``map`` over the
     scenarios, ``mapaccum`` over chunks of ``chunk`` steps). Returns one dict per scenario, in order, with the
-    columns of :func:`classify` plus ``guidance_call_us`` (``nan`` unless ``time_guidance_calls``).
+    columns of :func:`classify` plus ``guidance_call_us`` (``nan`` unless ``time_guidance_calls``) and, with
+    ``explain``, the columns of :func:`explain_run` (from a history kept every :data:`HISTORY_EVERY` steps).
 
     Parameters
     ----------
@@ -250,8 +302,10 @@ def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT
         Steps per compiled chunk.
     time_guidance_calls : bool
         Measure the compiled guidance call per ship of every batch.
+    explain : bool
+        Keep a history and add the failure mechanism and the own ship's COLREG compliance.
     """
-    from .simulation import simulate_batch
+    from .simulation import simulate_batch, simulate_batch_history
     problems = [build_problem(sc, params) for sc in scenarios]
     groups: dict[Layout, list[int]] = {}
     for i, pr in enumerate(problems):
@@ -260,11 +314,17 @@ def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT
     for layout, idx in groups.items():
         X0 = np.column_stack([problems[i].x0 for i in idx])
         P = np.column_stack([problems[i].p for i in idx])
-        XF, _busy = simulate_batch(layout, X0, P, chunk=chunk)
+        every = HISTORY_EVERY if chunk % HISTORY_EVERY == 0 else 1
+        if explain:
+            XF, _busy, hist = simulate_batch_history(layout, X0, P, chunk=chunk, every=every)
+        else:
+            XF, _busy = simulate_batch(layout, X0, P, chunk=chunk)
         us = time_guidance(layout, np.hstack([X0, XF]), np.hstack([P, P])) if time_guidance_calls else math.nan
         for col, i in enumerate(idx):
             row = classify(problems[i].model, XF[:, col])
             row["guidance_call_us"] = us
+            if explain:
+                row.update(explain_run(scenarios[i], problems[i].model, XF[:, col], *hist.column(col)))
             out[i] = row
     return out  # type: ignore[return-value]
 
@@ -624,7 +684,8 @@ def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT
     ----------
     out_dir : str or Path
         Output directory: ``runs.csv`` (one row per run, appended as batches finish), ``study.json`` (the
-        resolved parameter set and the seed the table was made with), ``summary.csv``, ``summary.md``,
+        resolved parameter set and the seed the table was made with), ``summary.csv``, ``summary.md`` (with
+        the failure mechanisms and the paired comparisons), ``comparisons.csv``,
         ``statistics.png``, ``metrics.json`` (config, parameters and summary rows) and
         ``failures/env{e}_{method}_run{r}.toml`` (first ≤ 20 failures per cell, replayable with
         ``mmg-casadi simulate``).
@@ -752,7 +813,13 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
     rows.sort(key=lambda r: (r["environment"], order[r["method"]], r["run"]))
     summary = summarize(rows)
     summary.to_csv(out / "summary.csv")
-    (out / "summary.md").write_text(summary.to_markdown() + "\n", encoding="utf-8")
+    from .comparisons import compare_methods, to_markdown, write_csv
+    comparisons = compare_methods(rows, methods)
+    write_csv(comparisons, out / "comparisons.csv")
+    (out / "summary.md").write_text(
+        summary.to_markdown() + "\n\n## Failure mechanisms (own ship; mmg_casadi.failures)\n\n"
+        + summary.failures_markdown() + "\n\n## Paired comparisons (same runs; exact McNemar test)\n\n"
+        + to_markdown(comparisons) + "\n", encoding="utf-8")
     from .plot_statistics import plot_statistics
     plot_statistics(summary, out / "statistics.png")
     failures = write_failures(rows, out / "failures", params=params)
@@ -761,7 +828,8 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
               "backend": backend, "address": address, "workers": workers, "batch_size": batch_size, "chunk": chunk,
               **ranges.to_dict()}
     write_json(out / "metrics.json", {
-        "config": config, "params": params, "summary": summary.rows, "runs_total": len(rows),
+        "config": config, "params": params, "summary": summary.rows, "comparisons": comparisons,
+        "runs_total": len(rows),
         "runs_new": new_runs, "elapsed_s": elapsed, "failure_files": [str(p.relative_to(out)) for p in failures]})
     return summary
 

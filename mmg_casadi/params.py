@@ -56,8 +56,8 @@ class Param:
         One of :data:`GROUPS`.
     low_open, high_open : bool
         Whether the bounds are excluded.
-    kind : {"float", "int", "choice"}
-        Numbers are floats unless ``"int"``; ``"choice"`` takes one of ``choices``.
+    kind : {"float", "int", "choice", "bool"}
+        Numbers are floats unless ``"int"``; ``"choice"`` takes one of ``choices``; ``"bool"`` true or false.
     choices : tuple of str
         Allowed values of a ``"choice"``.
     structural : bool
@@ -91,6 +91,8 @@ class Param:
         """
         if self.kind == "choice":
             return f"one of: {', '.join(self.choices)}"
+        if self.kind == "bool":
+            return "true or false"
         if self.kind == "int":
             return f"an integer >= {self.low:g}" if self.high is None else f"an integer in [{self.low:g}, {self.high:g}]"
         try:
@@ -115,6 +117,10 @@ class Param:
         field = field or self.name
         if self.kind == "choice":
             if not isinstance(value, str) or value not in self.choices:
+                raise cls(field, self.allowed(), value)
+            return value
+        if self.kind == "bool":
+            if not isinstance(value, bool):
                 raise cls(field, self.allowed(), value)
             return value
         if self.kind == "int":
@@ -215,12 +221,22 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("vo_candidates", 80, 1, 720, "", "candidate headings of the velocity obstacle (at the current speed)",
        "our choice: 4.5° resolution (at most 0.5°: the compiled loop grows with the count)", "velocity-obstacle",
        kind="int", structural=True),
-    _P("vo_cone", "wide", None, None, "", "cone half-angle: 'huang' asin(D/d) (Huang et al. 2018) or 'wide' "
-       "2·atan(D/d)", "laboratory's later version ('wide')", "velocity-obstacle", kind="choice",
-       choices=("huang", "wide"), structural=True),
+    _P("vo_cone", "huang", None, None, "", "cone half-angle about the neighbour's centre, D = collision_distance: "
+       "'huang' asin(D/d) (exact linear VO) or 'wide' 2·atan(D/d) (a superset)", "Huang et al. 2018 (Ocean Eng. "
+       "151), the LVO the paper follows (§Dynamic Obstacle Avoidance); 'wide' is the laboratory's later version",
+       "velocity-obstacle", kind="choice", choices=("huang", "wide"), structural=True),
+    _P("vo_hold", True, None, None, "", "keep the chosen heading while it stays outside every cone (re-pick when "
+       "it becomes forbidden or no neighbour is within R_safe); false: re-pick the goal-closest every step",
+       "paper §Statistical Analysis (the VO 'maintains this velocity until it steers clear')",
+       "velocity-obstacle", kind="bool", structural=True),
     # outcome
     _P("stall_window", 50.0, 0.0, None, "L/U", "a run that made no progress towards its goal for this long "
        "before t_max is 'stalled'", "our choice", "outcome", low_open=True),
+    _P("near_goal_distance", 10.0, 0.0, None, "L", "a collision with a ship within this distance of its goal "
+       "(or with an obstacle this close to the own goal) is a 'near-goal' failure",
+       "our choice: where the sink's pull |Λ|/r_g (Λ = −100) still beats the modified vortex f|K⁰|/d at the "
+       "collision distance d = 2 L with f = 2 (K⁰ = −10): r_g < 10 L (paper §Limitations, 2nd mechanism)",
+       "outcome", low_open=True),
     # environment (calm water by default, as in the paper; see mmg_casadi.environment)
     _P("current_speed", 0.0, 0.0, 1.0, "U", "speed of a uniform current (fraction of the design speed)",
        "our choice: calm water as in the paper; model Fossen 2021 §10.3 (mmg_casadi.environment)",
@@ -357,7 +373,8 @@ def markdown_table() -> str:
         for n in group(g):
             p = PARAMETERS[n]
             allowed = p.allowed().removeprefix("a number in ").removeprefix("one of: ")
-            cells = (str(p.default), allowed, p.meaning, p.source)
+            default = str(p.default).lower() if p.kind == "bool" else str(p.default)
+            cells = (default, allowed, p.meaning, p.source)
             rows.append(f"| `{n}` | " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
     return "\n".join(rows)
 

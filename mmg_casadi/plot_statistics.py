@@ -1,7 +1,9 @@
-"""The paper's five-panel figure of the statistical analysis, drawn from a :class:`~mmg_casadi.results.Summary`.
+"""The paper's five-panel figure of the statistical analysis, plus the own ship's COLREG compliance, drawn from a
+:class:`~mmg_casadi.results.Summary`.
 
-Panels: success rate, computation time per guidance call, time to goal, control effort (CE) and mean
-cross-track error (MCTE), each against the environment number, one series per method with 95 % confidence
+Panels: success rate, computation time per guidance call, time to goal, control effort (CE), mean
+cross-track error (MCTE) and the share of runs (with a classified encounter) in which the own ship kept the
+COLREGs (not in the paper), each against the environment number, one series per method with 95 % confidence
 intervals as error bars. The figure is built with :class:`matplotlib.figure.Figure` directly (no pyplot, no
 global backend switch), so it works headless.
 """
@@ -22,6 +24,7 @@ PANELS: tuple[tuple[str, str, str, float], ...] = (
     ("time_to_goal", "Time to reach the goal", "Time to goal [L/U]", 1.0),
     ("ce", "Control effort (CE)", "CE [-]", 1.0),
     ("mcte", "Mean cross-track error (MCTE)", "MCTE [L]", 1.0),
+    ("compliance", "Own ship COLREG-compliant (runs with an encounter)", "Compliant [%]", 100.0),
 )
 """(metric, title, y label, scale) of each panel; the success rate is shown in percent."""
 
@@ -29,8 +32,8 @@ _MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 
 
 def _columns(metric: str) -> tuple[str, str, str]:
-    if metric == "success":
-        return "success_rate", "success_ci_low", "success_ci_high"
+    if metric in ("success", "compliance"):
+        return f"{metric}_rate", f"{metric}_ci_low", f"{metric}_ci_high"
     return f"{metric}_mean", f"{metric}_ci_low", f"{metric}_ci_high"
 
 
@@ -39,7 +42,7 @@ def _nan_to_zero(x: float) -> float:
 
 
 def plot_statistics(summary, path=None) -> Figure:
-    """Draw the five-panel statistics figure; save it if ``path`` is given.
+    """Draw the six-panel statistics figure; save it if ``path`` is given.
 
     Parameters
     ----------
@@ -60,7 +63,7 @@ def plot_statistics(summary, path=None) -> Figure:
     ...         for e in (1, 2) for m in ("apf", "modified-vortex") for r in range(5)]
     >>> fig = plot_statistics(summarize(rows))
     >>> len(fig.axes)
-    5
+    6
     """
     if isinstance(summary, Summary):
         rows = summary.rows
@@ -74,8 +77,8 @@ def plot_statistics(summary, path=None) -> Figure:
     envs = sorted({int(r["environment"]) for r in rows})
 
     fig = Figure(figsize=(11.0, 12.0), layout="constrained")
-    grid = fig.add_gridspec(3, 4)
-    slots = [grid[0, 1:3], grid[1, 0:2], grid[1, 2:4], grid[2, 0:2], grid[2, 2:4]]
+    grid = fig.add_gridspec(3, 2)
+    slots = [grid[0, 0], grid[1, 0], grid[1, 1], grid[2, 0], grid[2, 1], grid[0, 1]]
     width = 0.3
     offsets = [width * (i - (len(methods) - 1) / 2) / max(len(methods), 1) for i in range(len(methods))]
     for slot, (metric, title, ylabel, scale) in zip(slots, PANELS):
@@ -86,7 +89,7 @@ def plot_statistics(summary, path=None) -> Figure:
             xs, ys, lo, hi = [], [], [], []
             for env in envs:
                 r = by_env.get(env)
-                if r is None or r[mean_col] is None or not math.isfinite(r[mean_col]):
+                if r is None or r.get(mean_col) is None or not math.isfinite(r[mean_col]):
                     continue
                 y = scale * r[mean_col]
                 xs.append(env + offsets[i])

@@ -23,8 +23,17 @@ RUN_COLUMNS: tuple[str, ...] = (
     "failure_time", "time_to_goal", "ce", "mcte", "fleet_time_to_goal", "fleet_ce", "fleet_mcte",
     "min_distance", "guidance_call_us", "n_ships", "n_obstacles",
     "current_speed", "current_direction_deg", "wind_speed", "wind_direction_deg",
+    "failure_mechanism", "colregs_compliant", "colregs_encounters",
 )
-"""Columns of the results CSV, in order."""
+"""Columns of the results CSV, in order (version :data:`RESULTS_VERSION`)."""
+
+RESULTS_VERSION = 2
+"""Version of :data:`RUN_COLUMNS`: 2 added ``failure_mechanism``, ``colregs_compliant`` and
+``colregs_encounters``; a table of another version is refused, never misread."""
+
+MECHANISMS: tuple[str, ...] = ("started-too-close", "obstacle-near-goal", "near-goal", "ship-ship", "obstacle",
+                               "stalled", "timeout", "diverged")
+"""Allowed non-empty values of ``failure_mechanism`` (:data:`mmg_casadi.failures.MECHANISMS`)."""
 
 KEY_COLUMNS: tuple[str, str, str] = ("environment", "method", "run")
 """Columns that identify a run; a key is stored at most once."""
@@ -32,9 +41,9 @@ KEY_COLUMNS: tuple[str, str, str] = ("environment", "method", "run")
 FAILURES: tuple[str, ...] = ("", "collision", "timeout", "diverged", "stalled")
 """Allowed values of the ``failure`` column (``""`` for a successful run)."""
 
-_INT_COLUMNS = frozenset({"environment", "run", "seed", "n_ships", "n_obstacles"})
-_BOOL_COLUMNS = frozenset({"success", "fleet_success"})
-_STR_COLUMNS = frozenset({"method", "failure", "failure_pair"})
+_INT_COLUMNS = frozenset({"environment", "run", "seed", "n_ships", "n_obstacles", "colregs_encounters"})
+_BOOL_COLUMNS = frozenset({"success", "fleet_success", "colregs_compliant"})
+_STR_COLUMNS = frozenset({"method", "failure", "failure_pair", "failure_mechanism"})
 _FLOAT_COLUMNS = frozenset(RUN_COLUMNS) - _INT_COLUMNS - _BOOL_COLUMNS - _STR_COLUMNS
 
 METRICS: tuple[str, ...] = ("time_to_goal", "ce", "mcte", "guidance_call_us")
@@ -45,6 +54,8 @@ _OVER_SUCCESSES = frozenset({"time_to_goal", "ce", "mcte"})
 SUMMARY_COLUMNS: tuple[str, ...] = (
     "environment", "method", "runs", "success_rate", "success_ci_low", "success_ci_high",
     *(f"{m}_{s}" for m in METRICS for s in ("mean", "ci_low", "ci_high")),
+    "compliance_runs", "compliance_rate", "compliance_ci_low", "compliance_ci_high",
+    *(f"failures_{m.replace('-', '_')}" for m in MECHANISMS),
 )
 """Columns of :meth:`Summary.to_csv`, in order."""
 
@@ -153,6 +164,11 @@ class ResultsTable:
         reader = csv.reader(io.StringIO(text, newline=""))
         header = next(reader)
         if tuple(header) != RUN_COLUMNS:
+            missing = [c for c in RUN_COLUMNS if c not in header]
+            if missing and all(c in RUN_COLUMNS for c in header):
+                raise InputError(str(self.path), f"a results table of version {RESULTS_VERSION} (this one is from an "
+                                 f"older version, without the columns {', '.join(missing)}; use a new output "
+                                 "directory or rerun the study there)", ",".join(header))
             raise InputError(str(self.path), f"a results CSV with the columns {', '.join(RUN_COLUMNS)}",
                              ",".join(header))
         rows, seen = [], set()
@@ -219,6 +235,9 @@ class ResultsTable:
             failure = row.get("failure") or ""
             if failure not in FAILURES:
                 raise InputError(f"rows[{i}].failure", " or ".join(repr(f) for f in FAILURES), failure)
+            mechanism = row.get("failure_mechanism") or ""
+            if mechanism not in ("", *MECHANISMS):
+                raise InputError(f"rows[{i}].failure_mechanism", f"'' or one of {', '.join(MECHANISMS)}", mechanism)
             cells = [_format_cell(c, row.get(c)) for c in RUN_COLUMNS]
             key = _key(dict(zip(RUN_COLUMNS, (_parse_cell(c, v) for c, v in zip(RUN_COLUMNS, cells)))))
             if key in keys or key in new_keys:
@@ -359,20 +378,41 @@ class Summary:
         >>> rows = [{"environment": 1, "method": "apf", "run": i, "success": i > 0, "time_to_goal": 60.0 + i,
         ...          "ce": 0.1, "guidance_call_us": 3.0} for i in range(4)]
         >>> print(summarize(rows).to_markdown())
-        | Env | Method | Runs | Success [%] | Time to goal [L/U] | CE | MCTE [L] | Guidance call [µs] |
-        |---:|:---|---:|:---|:---|:---|:---|:---|
-        | 1 | apf | 4 | 75.0 [30.1, 95.4] | 62.0 [60.9, 63.1] | 0.100 [0.100, 0.100] | n/a [n/a, n/a] | 3.00 [3.00, 3.00] |
+        | Env | Method | Runs | Success [%] | Time to goal [L/U] | CE | MCTE [L] | Guidance call [µs] | COLREG-compliant [%] (runs) |
+        |---:|:---|---:|:---|:---|:---|:---|:---|:---|
+        | 1 | apf | 4 | 75.0 [30.1, 95.4] | 62.0 [60.9, 63.1] | 0.100 [0.100, 0.100] | n/a [n/a, n/a] | 3.00 [3.00, 3.00] | n/a (0) |
         """
         head = ["Env", "Method", "Runs", "Success [%]", "Time to goal [L/U]", "CE", "MCTE [L]",
-                "Guidance call [µs]"]
-        lines = ["| " + " | ".join(head) + " |", "|---:|:---|---:|" + ":---|" * 5]
+                "Guidance call [µs]", "COLREG-compliant [%] (runs)"]
+        lines = ["| " + " | ".join(head) + " |", "|---:|:---|---:|" + ":---|" * 6]
         for r in self.rows:
             success = (f"{100 * r['success_rate']:.1f} [{100 * r['success_ci_low']:.1f}, "
                        f"{100 * r['success_ci_high']:.1f}]")
             cells = [str(r["environment"]), str(r["method"]), str(r["runs"]), success]
             for m in METRICS:
                 cells.append(f"{_sig3(r[f'{m}_mean'])} [{_sig3(r[f'{m}_ci_low'])}, {_sig3(r[f'{m}_ci_high'])}]")
+            n_c = r.get("compliance_runs", 0)
+            cells.append(f"{100 * r['compliance_rate']:.1f} [{100 * r['compliance_ci_low']:.1f}, "
+                         f"{100 * r['compliance_ci_high']:.1f}] ({n_c})" if n_c else "n/a (0)")
             lines.append("| " + " | ".join(cells) + " |")
+        return "\n".join(lines)
+
+    def failures_markdown(self) -> str:
+        """A Markdown table of the failed runs of every cell by mechanism (:data:`MECHANISMS`).
+
+        Examples
+        --------
+        >>> rows = [{"environment": 1, "method": "apf", "run": 0, "success": False, "failure_mechanism": "near-goal"}]
+        >>> print(summarize(rows).failures_markdown().splitlines()[2])
+        | 1 | apf | 1 | 1 | 0 | 0 | 1 | 0 | 0 | 0 | 0 | 0 |
+        """
+        head = ["Env", "Method", "Runs", "Failed", *MECHANISMS]
+        lines = ["| " + " | ".join(head) + " |", "|---:|:---|---:|---:|" + "---:|" * len(MECHANISMS)]
+        for r in self.rows:
+            counts = [r[f"failures_{m.replace('-', '_')}"] for m in MECHANISMS]
+            failed = r["runs"] - round(r["success_rate"] * r["runs"])
+            lines.append("| " + " | ".join(str(v) for v in (r["environment"], r["method"], r["runs"], failed,
+                                                               *counts)) + " |")
         return "\n".join(lines)
 
     def to_pandas(self):
@@ -447,5 +487,12 @@ def summarize(rows) -> Summary:
             pool = successes if m in _OVER_SUCCESSES else group
             mean, lo, hi = mean_ci(r.get(m) for r in pool)
             summary.update({f"{m}_mean": mean, f"{m}_ci_low": lo, f"{m}_ci_high": hi})
+        judged = [r.get("colregs_compliant") for r in group if r.get("colregs_compliant") in (True, False)]
+        kc = sum(1 for c in judged if c)
+        clo, chi = wilson_interval(kc, len(judged)) if judged else (math.nan, math.nan)
+        summary.update({"compliance_runs": len(judged), "compliance_rate": kc / len(judged) if judged else math.nan,
+                        "compliance_ci_low": clo, "compliance_ci_high": chi})
+        for mech in MECHANISMS:
+            summary[f"failures_{mech.replace('-', '_')}"] = sum(1 for r in group if r.get("failure_mechanism") == mech)
         out.append(summary)
     return Summary(rows=out)

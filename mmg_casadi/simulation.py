@@ -49,6 +49,24 @@ def _chunk_final(layout: Layout, chunk: int, batch: int) -> ca.Function:
     return ca.Function(f"chunk_final_{layout.key()}_{chunk}_{batch}", [x, p], [X[:, -batch:]])
 
 
+HISTORY_STATE: tuple[str, ...] = ("x", "y", "psi", "status")
+"""Ship state variables kept by :func:`simulate_batch_history`."""
+
+
+@lru_cache(maxsize=64)
+def _chunk_history(layout: Layout, chunk: int, batch: int, every: int) -> ca.Function:
+    """``chunk`` steps of a batch returning the final states and, every ``every`` steps, the time and the
+    :data:`HISTORY_STATE` rows of every ship (``(1 + 4 N, (chunk // every) * batch)``, step-major blocks)."""
+    F = _chunk(layout, chunk, batch)
+    x = ca.MX.sym("x", layout.nx, batch)
+    p = ca.MX.sym("p", layout.np, batch)
+    X, _ = F(x, p)
+    rows = [0] + [1 + i * NS + S_[name] for i in range(layout.n_ships) for name in HISTORY_STATE]
+    cols = [k * batch + j for k in range(every - 1, chunk, every) for j in range(batch)]
+    return ca.Function(f"chunk_hist_{layout.key()}_{chunk}_{batch}_{every}", [x, p],
+                       [X[:, -batch:], X[rows, cols]])
+
+
 def _finished(layout: Layout, x: np.ndarray, t_max) -> np.ndarray:
     """Per column of scenario states: every ship has stopped sailing, or that column's horizon is reached."""
     x = np.atleast_2d(x.T).T
@@ -252,3 +270,98 @@ def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int 
             x = np.hstack([x, X0[:, new]])
             p = np.hstack([p, P[:, new]])
     return out, busy
+
+
+@dataclass
+class BatchHistory:
+    """Decimated history of a batch rollout (:func:`simulate_batch_history`).
+
+    Parameters
+    ----------
+    t : list of ndarray (K_m,)
+        Per scenario, the time of each kept sample (the initial state first).
+    states : list of ndarray (K_m, N, 4)
+        Per scenario, ``x``, ``y``, ``psi`` and ``status`` (:data:`HISTORY_STATE`) of every ship.
+    """
+
+    t: list
+    states: list
+
+    def column(self, m: int) -> tuple[np.ndarray, np.ndarray]:
+        """Times ``(K,)`` and ship states ``(K, N, 4)`` of scenario ``m``, up to its last advancing sample.
+
+        Parameters
+        ----------
+        m : int
+            Column (scenario) index.
+        """
+        t = self.t[m]
+        last = int(np.argmax(t)) + 1  # the clock stops at the horizon; later samples repeat the final state
+        return t[:last], self.states[m][:last]
+
+
+def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int = 100, every: int = 2,
+                           width: int | None = DEFAULT_WIDTH) -> tuple[np.ndarray, float, BatchHistory]:
+    """:func:`simulate_batch` that also keeps the time, position, heading and status of every ship every
+    ``every`` guidance steps (from the compiled ``mapaccum`` outputs; ``chunk`` must be a multiple of ``every``).
+
+    Returns the final scenario states ``(nx, M)``, the wall time spent in compiled code (s) and the
+    :class:`BatchHistory` (the initial state is its first sample). Finished scenarios leave the batch as in
+    :func:`simulate_batch`.
+
+    Parameters
+    ----------
+    layout : Layout
+        Shape of the closed loop.
+    X0, P : ndarray (nx, M), (np, M)
+        Initial states and parameter vectors, one column per scenario.
+    chunk : int
+        Steps per compiled call.
+    every : int
+        Keep every ``every``-th step.
+    width : int, optional
+        Scenarios stepped together (``None``: all ``M``).
+    """
+    if isinstance(every, bool) or not isinstance(every, int) or every < 1 or chunk % every:
+        raise ValueError(f"every: expected an integer >= 1 dividing chunk={chunk}, got {every!r}")
+    X0 = np.asarray(X0, float)
+    P = np.asarray(P, float)
+    M, N = X0.shape[1], layout.n_ships
+    width = M if width is None else max(1, min(int(width), M))
+    t_row = GLOBAL_PARAMS.index("t_max")
+    rows = [0] + [1 + i * NS + S_[name] for i in range(N) for name in HISTORY_STATE]
+    hist: list[list[np.ndarray]] = [[X0[rows, j][None, :]] for j in range(M)]
+    out = X0.copy()
+    active = [j for j in range(M) if not _finished(layout, X0[:, j:j + 1], P[t_row, j])[0]]
+    pending = active[width:]
+    active = active[:width]
+    x, p = X0[:, active], P[:, active]
+    busy = 0.0
+    while active:
+        F = _chunk_history(layout, chunk, len(active), every)
+        t0 = time.perf_counter()
+        xf, H = F(x, p)
+        busy += time.perf_counter() - t0
+        x = np.array(xf)
+        H = np.array(H).reshape(len(rows), chunk // every, len(active))
+        for k, j in enumerate(active):
+            hist[j].append(H[:, :, k].T)
+        done = _finished(layout, x, p[t_row])
+        if not done.any():
+            continue
+        out[:, [active[k] for k in np.flatnonzero(done)]] = x[:, done]
+        keep = np.flatnonzero(~done)
+        active = [active[k] for k in keep]
+        x, p = x[:, keep], p[:, keep]
+        n_new = min(len(pending), width - len(active))
+        if n_new:
+            new, pending = pending[:n_new], pending[n_new:]
+            active += new
+            x = np.hstack([x, X0[:, new]])
+            p = np.hstack([p, P[:, new]])
+    t, states = [], []
+    for j in range(M):
+        Hj = np.concatenate(hist[j], axis=0)  # (K_j, rows)
+        t.append(Hj[:, 0])
+        states.append(Hj[:, 1:].reshape(len(Hj), N, len(HISTORY_STATE)))
+    return out, busy, BatchHistory(t, states)

@@ -7,7 +7,8 @@ collision cone about the line of sight p_i − p_own, i.e. the angle between w a
 half-angle α_i and w ≠ 0 (testing w instead of v_j is the cone's apex shifted by the neighbour's velocity). Two
 cones are offered, d the distance to the neighbour and D the collision distance (combined radius):
 
-* ``"huang"``: α = asin(min(1, D/d)), the exact cone of relative velocities whose straight line passes within D;
+* ``"huang"``: α = asin(min(1, D/d)), the exact cone of relative velocities whose straight line passes within D
+  (the linear velocity obstacle of Huang et al. 2018 the paper follows; the default);
 * ``"wide"``: α = min(π/2, 2 atan(D/d)), the wider cone of the laboratory's later version (a superset).
 
 The chosen heading is the feasible candidate closest to the goal direction. Near-ties (within 1e-6 rad) go to
@@ -16,6 +17,19 @@ rules 14–15 ask). When no candidate is feasible the fallback picks the least-b
 largest penetration max_i (α_i − angle_ij) over the neighbours forbidding it is smallest, ties broken by the goal
 cost as above. All selection is done with CasADi ``if_else`` folds, so every argument may be symbolic (SX or MX);
 plain numbers, numpy arrays and DM give DM.
+
+**Combined radius D.** The cone is built around the neighbour's *centre* with D = the collision distance (2 L,
+the paper's collision threshold between ship centres). Huang et al. enlarge each agent to a disc and use the sum
+of the two radii; our outcome judges a collision by the distance between centres (2 L for ship–ship and
+ship–obstacle alike), so a velocity outside the cone of half-angle asin(D/d) is exactly one whose straight line
+keeps the centres at least D apart — the VO avoids what the outcome counts, no more, no less.
+
+**Hold or re-pick** (:func:`hold_heading`). The paper describes the VO as selecting a velocity that avoids
+collision and maintaining it "until it steers clear of the other vessel" (§Statistical Analysis). With ``hold``
+the ship keeps a remembered heading while the velocity at that heading (at the current speed) stays outside
+every active cone, and picks again (the goal-closest feasible candidate) when it becomes forbidden; while no
+neighbour is within R_safe the memory follows the ship's heading, so the choice starts afresh at the next
+encounter. Without ``hold`` the goal-closest feasible candidate is picked at every step.
 """
 
 from __future__ import annotations
@@ -44,13 +58,13 @@ class VelocityObstacleParams:
 
     ``collision_distance``: combined radius D of the cone (L, > 0; the collision threshold, 2 L);
     ``n_candidates``: number of candidate headings evenly spread around the circle (integer ≥ 2);
-    ``cone``: ``"huang"`` (half-angle asin(min(1, D/d))) or ``"wide"`` (half-angle min(π/2, 2 atan(D/d)), the
-    laboratory's later version and the default).
+    ``cone``: ``"huang"`` (half-angle asin(min(1, D/d)), Huang et al. 2018, the default) or ``"wide"``
+    (half-angle min(π/2, 2 atan(D/d)), the laboratory's later version).
     """
 
     collision_distance: float = 2.0
     n_candidates: int = 80
-    cone: str = "wide"
+    cone: str = "huang"
 
     def __post_init__(self):
         check_range("collision_distance", self.collision_distance, 0.0, None, low_open=True, unit="L")
@@ -73,7 +87,7 @@ def _half_angle(d, collision_distance, cone):
 
 
 def velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance,
-                            n_candidates, cone="wide", current_heading=None):
+                            n_candidates, cone="huang", current_heading=None):
     """Candidate headings and their feasibility, penetration and goal cost.
 
     Returns a dict: ``headings`` (1×n, θ_j), ``forbidden`` (M×n, 1 where neighbour i forbids candidate j),
@@ -130,7 +144,7 @@ def velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *,
 
 
 def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance, n_candidates,
-                      cone="wide", current_heading=None):
+                      cone="huang", current_heading=None):
     """Desired heading ψ_d (rad, (−π, π]) chosen by the constant-speed linear velocity obstacle.
 
     The feasible candidate with the smallest goal cost wins (strict <, so the first minimum in candidate order
@@ -259,7 +273,7 @@ def _direct_function(m, n, cone, with_heading):
 
 
 def _velocity_obstacle_reference(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance,
-                                 n_candidates, cone="wide", current_heading=None):
+                                 n_candidates, cone="huang", current_heading=None):
     """The direct implementation (every candidate against every neighbour, trigonometric tests).
 
     Used by :func:`velocity_obstacle` for the fallback and the degenerate cases; see it for the semantics.
@@ -279,3 +293,58 @@ def _velocity_obstacle_reference(own_pos, own_speed, goal, nb_pos, nb_vel, activ
         fb_c = ca.if_else(fb_better, cost[j], fb_c)
         fb_th = ca.if_else(fb_better, headings[j], fb_th)
     return wrap_angle(ca.if_else(best_c < _BIG / 2, best_th, fb_th))
+
+
+def heading_feasible(own_pos, own_speed, heading, nb_pos, nb_vel, active, *, collision_distance, cone="huang"):
+    """1 if the velocity ``own_speed`` (cos ψ, sin ψ) at ``heading`` ψ lies outside the cone of every active
+    neighbour, else 0 (same cone test as :func:`velocity_obstacle_terms`: angle(w, l) < α and w ≠ 0).
+
+    Examples
+    --------
+    >>> import casadi as ca
+    >>> nb, v = ca.DM([[10], [0]]), ca.DM.zeros(2, 1)
+    >>> [int(heading_feasible([0, 0], 1.0, h, nb, v, [1], collision_distance=2.0)) for h in (0.0, 0.2, 0.25)]
+    [0, 0, 1]
+    >>> int(heading_feasible([0, 0], 1.0, 0.0, nb, v, [0], collision_distance=2.0))  # inactive: no cone
+    1
+    """
+    _check_structure(2, cone)
+    own_pos, nb_pos, nb_vel = _col2(own_pos), _matrix(nb_pos, 2), _matrix(nb_vel, 2)
+    m = nb_pos.size2()
+    active = _row(active, m)
+    v = own_speed * ca.vertcat(ca.cos(heading), ca.sin(heading))
+    ok = 1
+    for i in range(m):
+        los = nb_pos[:, i] - own_pos
+        half = _half_angle(ca.fmax(ca.norm_2(los), R_MIN), collision_distance, cone)
+        w = v - nb_vel[:, i]
+        angle = ca.atan2(ca.fabs(los[0] * w[1] - los[1] * w[0]), los[0] * w[0] + los[1] * w[1])
+        forb = (active[i] > 0) * (ca.sumsqr(w) > 1e-12) * (angle < half)
+        ok = ok * (1 - forb)
+    return ok
+
+
+def hold_heading(fresh, held, own_pos, own_speed, nb_pos, nb_vel, active, *, collision_distance, cone="huang"):
+    """The heading the ship steers with the paper's "keep the chosen velocity" behaviour.
+
+    ``held`` (the remembered heading) while some neighbour is active and ``held`` is feasible
+    (:func:`heading_feasible`); otherwise ``fresh`` (the heading :func:`velocity_obstacle` picks now).
+
+    Examples
+    --------
+    >>> import casadi as ca
+    >>> nb, v = ca.DM([[10], [0]]), ca.DM.zeros(2, 1)
+    >>> kw = dict(collision_distance=2.0, cone="huang")
+    >>> float(hold_heading(0.3, 0.5, [0, 0], 1.0, nb, v, [1], **kw))  # 0.5 rad still clear: keep it
+    0.5
+    >>> float(hold_heading(0.3, 0.1, [0, 0], 1.0, nb, v, [1], **kw))  # 0.1 rad forbidden: choose again
+    0.3
+    >>> float(hold_heading(0.3, 0.5, [0, 0], 1.0, nb, v, [0], **kw))  # nobody within R_safe: fresh choice
+    0.3
+    """
+    m = _matrix(nb_pos, 2).size2()
+    act = _row(active, m)
+    any_active = ca.sum2(act) > 0 if m else 0
+    ok = heading_feasible(own_pos, own_speed, held, nb_pos, nb_vel, act, collision_distance=collision_distance,
+                          cone=cone)
+    return ca.if_else(any_active * ok, held, fresh)

@@ -31,6 +31,8 @@ def _row(env: int, method: str, run: int, success: bool = True, **extra) -> dict
         "guidance_call_us": 4.0 + run / 17, "n_ships": 3, "n_obstacles": 1,
         "current_speed": 0.1 * run / 23, "current_direction_deg": -170.0 + run, "wind_speed": 15.0 * run / 29,
         "wind_direction_deg": 33.5 - run,
+        "failure_mechanism": "" if success else "obstacle", "colregs_compliant": None if run % 3 == 0 else run % 2 == 0,
+        "colregs_encounters": 0 if run % 3 == 0 else 1 + run % 2,
     }
     row.update(extra)
     return row
@@ -297,13 +299,13 @@ def test_plot_statistics_writes_png(tmp_path):
     path = tmp_path / "fig" / "statistics.png"
     fig = plot_statistics(summarize(rows), path=path)
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert len(fig.axes) == 5
+    assert len(fig.axes) == 6  # the paper's five panels and the COLREG compliance
     assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["apf", "vo", "mv"]
 
 
 def test_plot_statistics_accepts_rows_and_rejects_junk():
     summary = summarize(_hand_table())
-    assert len(plot_statistics(summary.rows).axes) == 5
+    assert len(plot_statistics(summary.rows).axes) == 6
     with pytest.raises(InputError):
         plot_statistics(Summary(rows=[]))
     with pytest.raises(InputError):

@@ -36,7 +36,8 @@ def test_static_obstacle_dead_ahead_leaves_the_cone_closest_to_goal():
     psi = float(velocity_obstacle(*args, **VO))
     t = velocity_obstacle_terms(*args, **VO)
     half = float(t["half_angle"])
-    assert half == pytest.approx(2 * math.atan(2 / 10))
+    assert VO["cone"] == "huang"  # Huang et al.'s exact cone is the default
+    assert half == pytest.approx(math.asin(2 / 10))
     assert abs(psi) >= half
     feasible = np.array(t["feasible"]).ravel().astype(bool)
     headings = np.array(t["headings"]).ravel()
@@ -121,7 +122,7 @@ def test_builds_a_function_with_symbols(sym):
 
 
 def test_parameter_validation():
-    assert VelocityObstacleParams() == VelocityObstacleParams(2.0, 80, "wide")
+    assert VelocityObstacleParams() == VelocityObstacleParams(2.0, 80, "huang")
     for bad in (dict(collision_distance=0.0), dict(n_candidates=1), dict(n_candidates=8.0), dict(cone="narrow")):
         with pytest.raises(ParameterError):
             VelocityObstacleParams(**bad)
