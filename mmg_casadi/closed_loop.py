@@ -136,8 +136,8 @@ class Layout:
 
     @property
     def method_inputs(self) -> tuple[str, ...]:
-        """Numeric step inputs of the methods this layout uses (:attr:`mmg_casadi.methods.Method.inputs`),
-        after the others in the parameter vector."""
+        """Numeric step inputs of the methods this layout uses (the ``inputs`` of each
+        :class:`mmg_casadi.methods.Method`), after the others in the parameter vector."""
         used = set(self.methods)
         return tuple(k for n, m in methods.METHODS.items() if n in used for k in m.inputs)
 
@@ -442,8 +442,8 @@ def ship_rows(layout: Layout, X: np.ndarray) -> np.ndarray:
 
 
 def step_values(resolved: dict) -> dict:
-    """The step's numeric inputs (:data:`GLOBAL_PARAMS` and every method's
-    :attr:`~mmg_casadi.methods.Method.inputs`) from a resolved parameter set (table angles in degrees to rad).
+    """The step's numeric inputs (:data:`GLOBAL_PARAMS` and the ``inputs`` of every
+    :class:`~mmg_casadi.methods.Method`) from a resolved parameter set (table angles in degrees to rad).
 
     Examples
     --------
@@ -464,6 +464,17 @@ def step_values(resolved: dict) -> dict:
 def is_disturbed(resolved: dict) -> bool:
     """Whether a resolved parameter set has a current, a wind or crab-angle compensation (a disturbed layout).
 
+    Parameters
+    ----------
+    resolved : dict
+        A full parameter set (:func:`mmg_casadi.params.resolve`); only ``current_speed``, ``wind_speed`` and
+        ``crab_compensation`` are read (a direction without a speed does not count).
+
+    Returns
+    -------
+    bool
+        True if ``current_speed > 0``, ``wind_speed > 0`` or ``crab_compensation == "on"``.
+
     Examples
     --------
     >>> is_disturbed(resolve()), is_disturbed(resolve({"current_direction_deg": 90.0}))
@@ -478,6 +489,21 @@ def is_disturbed(resolved: dict) -> bool:
 def env_values(resolved: dict, ship: ShipParams | None = None) -> list[float]:
     """The :data:`ENV_INPUTS` of a resolved parameter set: speeds over ``ship``'s design speed (default the KCS,
     12.347 m/s; the table's current is already a fraction of it, its wind in m/s), directions in rad, crab 0/1.
+
+    Parameters
+    ----------
+    resolved : dict
+        A full parameter set (:func:`mmg_casadi.params.resolve`); reads ``current_speed`` (fraction of the
+        design speed), ``current_direction_deg`` and ``wind_direction_deg`` (deg), ``wind_speed`` (m/s) and
+        ``crab_compensation`` (``"on"`` or ``"off"``).
+    ship : ShipParams, optional
+        Ship whose design speed ``U_design`` [m/s] makes the wind speed non-dimensional; the KCS
+        (:func:`mmg_casadi.ship.load_kcs`) if omitted.
+
+    Returns
+    -------
+    list of float
+        ``[V_c, beta_c, U_w, psi_w, crab]`` in the order of :data:`ENV_INPUTS`.
 
     Examples
     --------

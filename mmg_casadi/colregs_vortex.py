@@ -7,9 +7,9 @@ keep my course" predictions are judged against it, so the own evasive turn chang
 
 - **Role** (Rules 13–15). γ is the bearing of the neighbour from the planned course, α the bearing of the own
   ship from the neighbour's bow (its heading taken from its velocity). The own ship is **stand-on** for a ship
-  abaft its beam (|γ| > γ_max: being overtaken, Rule 13) and for a ship on its port side (γ < 0) that is neither
-  on a nearly reciprocal course (Rule 14: |γ| and the course difference from reciprocal both below θ_ho) nor
-  being overtaken by the own ship (|α| > γ_max). Everything else, including static obstacles (speed below
+  abaft its beam (``|γ| > γ_max``: being overtaken, Rule 13) and for a ship on its port side (γ < 0) that is neither
+  on a nearly reciprocal course (Rule 14: ``|γ|`` and the course difference from reciprocal both below θ_ho) nor
+  being overtaken by the own ship (``|α| > γ_max``). Everything else, including static obstacles (speed below
   ``v_ship_min``), is **give-way** and gets the paper's modified vortex
   (:func:`~mmg_casadi.fields.modified_vortex_terms`).
 - **Rule 17(a)(i)**: a stand-on neighbour gets no vortex — course and speed are kept.
@@ -60,33 +60,47 @@ class ColregsVortexParams:
     """Thresholds of ``colregs-vortex`` beyond the modified vortex's (lengths in L, times in L/U, angles in rad);
     defaults and ranges are the parameter table's ``cv_*`` entries (:mod:`mmg_casadi.params`, angles in degrees).
 
-    ``theta_head_on``: tolerance, both on the bearing from the bow and on the course difference from
-    reciprocal, within which a meeting counts as head-on (rad, (0, π/2)); 22.5° as the paper laboratory's
-    head-on sector 7π/8–9π/8 of relative heading.
-    ``d_cpa_act``: the stand-on ship acts alone when its planned-course CPA distance is below this (L, > 0);
-    3 L = 1.5 × the 2 L collision distance, below the ≈ 4 L (2 R_tol) passing distance the modified vortex's
-    give-way action aims at, so a give-way ship that acts as the paper's does never triggers it.
-    ``t_act``: TCPA below which the stand-on ship acts alone, 17(a)(ii) (L/U, > 0); 7 L/U ≈ 2.2 min for the
-    KCS (L/U ≈ 18.6 s): a give-way ship that entered R_safe = 15 L in a right-angle crossing (closing speed
-    √2 U, TCPA ≈ 10.6) had ≈ 3.6 L/U, more than twice its time to alter course by 30°, to act.
-    ``r_act``: range below which it acts alone whatever the TCPA (L, > 0); 8 L = 4 collision distances, for
-    slowly closing ships (being overtaken) whose TCPA stays long.
-    ``t_close``: TCPA at which the stand-on action reaches its full strength, 17(b) close quarters (L/U, > 0);
-    3 L/U is about the KCS's time to turn 90° with full rudder.
-    ``k_standon``: strength of the stand-on escape term at the trigger (L/unit time, > 0); 1.0 matches the sink
-    of the paper's Λ = −100 at the 15 L detection range (100 / 2π 15 ≈ 1.06).
-    ``dpsi_min``: minimum alteration from the goal bearing while a threat is present, Rule 8 "readily
-    apparent" (rad, [0, π/2]); 30° as NTNU's evaluator (Hagen et al. 2023 configuration, Δχ_app).
-    ``d_clear``: planned-course passing distance below which a give-way ship keeps its alteration (L, > 0);
-    6 L = 3 collision distances, above the 4 L the vortex aims at so the ship resumes its course only when clear.
-    ``v_ship_min``: neighbours slower than this are static obstacles without COLREG role (U, > 0); 0.05 is
-    below the slowest ship speed a scenario allows (0.2).
-    ``r_guard``: range inside which every neighbour also repels radially (L, > 0); 5 L = 2.5 collision
-    distances, about the KCS's advance in a full-rudder 90° turn plus the collision distance.
-    ``lam_guard``: strength of that repulsion, λ (1/d − 1/r_guard) (L²/unit time, ≥ 0; 0 disables it); 15
-    makes it 2, about twice the capped sink, at 3 L.
-    ``d_att_floor``: while anything is avoided, the goal attracts at most as strongly as from this distance
-    (L, ≥ 0); 15 L = R_safe, the range at which avoidance starts.
+    Parameters
+    ----------
+    theta_head_on : float
+        Tolerance, both on the bearing from the bow and on the course difference from reciprocal, within which
+        a meeting counts as head-on (rad, (0, π/2)); 22.5° as the paper laboratory's head-on sector 7π/8–9π/8
+        of relative heading.
+    d_cpa_act : float
+        The stand-on ship acts alone when its planned-course CPA distance is below this (L, > 0); 3 L = 1.5 ×
+        the 2 L collision distance, below the ≈ 4 L (2 R_tol) passing distance the modified vortex's give-way
+        action aims at, so a give-way ship that acts as the paper's does never triggers it.
+    t_act : float
+        TCPA below which the stand-on ship acts alone, 17(a)(ii) (L/U, > 0); 7 L/U ≈ 2.2 min for the KCS
+        (L/U ≈ 18.6 s): a give-way ship that entered R_safe = 15 L in a right-angle crossing (closing speed
+        √2 U, TCPA ≈ 10.6) had ≈ 3.6 L/U, more than twice its time to alter course by 30°, to act.
+    r_act : float
+        Range below which it acts alone whatever the TCPA (L, > 0); 8 L = 4 collision distances, for slowly
+        closing ships (being overtaken) whose TCPA stays long.
+    t_close : float
+        TCPA at which the stand-on action reaches its full strength, 17(b) close quarters (L/U, > 0); 3 L/U is
+        about the KCS's time to turn 90° with full rudder.
+    k_standon : float
+        Strength of the stand-on escape term at the trigger (L/unit time, > 0); 1.0 matches the sink of the
+        paper's Λ = −100 at the 15 L detection range (100 / 2π 15 ≈ 1.06).
+    dpsi_min : float
+        Minimum alteration from the goal bearing while a threat is present, Rule 8 "readily apparent" (rad,
+        [0, π/2]); 30° as NTNU's evaluator (Hagen et al. 2023 configuration, Δχ_app).
+    d_clear : float
+        Planned-course passing distance below which a give-way ship keeps its alteration (L, > 0); 6 L = 3
+        collision distances, above the 4 L the vortex aims at so the ship resumes its course only when clear.
+    v_ship_min : float
+        Neighbours slower than this are static obstacles without COLREG role (U, > 0); 0.05 is below the
+        slowest ship speed a scenario allows (0.2).
+    r_guard : float
+        Range inside which every neighbour also repels radially (L, > 0); 5 L = 2.5 collision distances, about
+        the KCS's advance in a full-rudder 90° turn plus the collision distance.
+    lam_guard : float
+        Strength of that repulsion, λ (1/d − 1/r_guard) (L²/unit time, ≥ 0; 0 disables it); 15 makes it 2,
+        about twice the capped sink, at 3 L.
+    d_att_floor : float
+        While anything is avoided, the goal attracts at most as strongly as from this distance (L, ≥ 0);
+        15 L = R_safe, the range at which avoidance starts.
     """
 
     theta_head_on: float = param_field("cv_theta_head_on_deg", math.pi / 180.0)
@@ -136,6 +150,36 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     strength), ``threat`` (1 where the Rule 8 minimum alteration applies), ``guard`` (radial push strength),
     ``avoid`` (1 where the neighbour is being avoided). ``d_att_floor`` is accepted so that
     :meth:`ColregsVortexParams.as_dict` can be passed whole; only :func:`colregs_vortex` uses it.
+
+    Parameters
+    ----------
+    own_pos : array_like
+        Own position (2×1, L).
+    own_psi : float or casadi.SX or casadi.MX
+        Own heading (rad, from x towards y).
+    own_vel : array_like
+        Own velocity in the global frame (2×1, L/unit time); its magnitude is the speed of the planned course.
+    goal : array_like
+        Own goal, the next waypoint (2×1, L); the planned course points at it.
+    nb_pos : array_like
+        Neighbour positions (2×M, L); M may be 0.
+    nb_vel : array_like
+        Neighbour velocities in the global frame (2×M, L/unit time).
+    k_vor0, r_safe, r_tol, gamma_max : float
+        Modified-vortex parameters, as in :class:`~mmg_casadi.fields.ModifiedVortexParams`: nominal vortex
+        strength (L²/unit time), detection radius R_safe (L), R_tol of the tangential-velocity threshold (L)
+        and the largest ``|γ|`` at which the vortex acts (rad).
+    theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon : float
+        COLREG thresholds of :class:`ColregsVortexParams` (meaning, units and ranges there).
+    dpsi_min, d_clear, v_ship_min, r_guard, lam_guard : float
+        The remaining COLREG thresholds of :class:`ColregsVortexParams`.
+    d_att_floor : float, optional
+        Ignored here (see above).
+
+    Returns
+    -------
+    dict
+        The quantities named above, CasADi expressions (DM for numeric input).
 
     Examples
     --------
@@ -226,6 +270,40 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
     escape term of every ship the own ship acts for, the Rule 8 minimum alteration, then the modified vortex
     of static obstacles and the close-range guard; see the module docstring. ``active`` (1×M, 0/1) masks
     neighbours as in :mod:`mmg_casadi.fields`.
+
+    Parameters
+    ----------
+    own_pos : array_like
+        Own position (2×1, L).
+    own_psi : float or casadi.SX or casadi.MX
+        Own heading (rad, from x towards y).
+    own_vel : array_like
+        Own velocity in the global frame (2×1, L/unit time); its magnitude is the speed of the planned course.
+    goal : array_like
+        Own goal, the next waypoint (2×1, L); the planned course points at it.
+    nb_pos : array_like
+        Neighbour positions (2×M, L); M may be 0.
+    nb_vel : array_like
+        Neighbour velocities in the global frame (2×M, L/unit time).
+    active : array_like
+        0/1 mask of the neighbours to consider (1×M; neighbour exists and lies within R_safe).
+    lam_sink : float
+        Sink strength Λ at the goal (L²/unit time, < 0 attracts).
+    k_vor0, r_safe, r_tol, gamma_max : float
+        Modified-vortex parameters, as in :class:`~mmg_casadi.fields.ModifiedVortexParams`: nominal vortex
+        strength (L²/unit time), detection radius R_safe (L), R_tol of the tangential-velocity threshold (L)
+        and the largest ``|γ|`` at which the vortex acts (rad).
+    theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon : float
+        COLREG thresholds of :class:`ColregsVortexParams` (meaning, units and ranges there).
+    dpsi_min, d_clear, v_ship_min, r_guard, lam_guard : float
+        The remaining COLREG thresholds of :class:`ColregsVortexParams`.
+    d_att_floor : float
+        While anything is avoided, the goal attracts at most as strongly as from this distance (L, ≥ 0).
+
+    Returns
+    -------
+    casadi.DM or casadi.SX or casadi.MX
+        The 2×1 desired-heading vector (see :func:`~mmg_casadi.fields.heading_of`).
 
     Examples
     --------

@@ -126,8 +126,22 @@ _RANGE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(?:-\s*([0-9]*
 
 
 def parse_range(text: str, field: str) -> tuple[float, float]:
-    """A range ``"LOW-HIGH"`` (or one number ``"X"`` for ``X-X``) of the command line, checked for ``field``
-    (``"current"`` or ``"wind"``).
+    """A range ``"LOW-HIGH"`` (or one number ``"X"`` for ``X-X``) of the command line, checked for ``field``.
+
+    Parameters
+    ----------
+    text : str
+        ``"LOW-HIGH"`` or ``"X"`` (meaning ``X-X``), non-negative decimal numbers (exponents allowed, no sign;
+        spaces around the numbers are ignored). Current speeds are fractions of the design speed in [0, 1],
+        wind speeds m/s in [0, 60].
+    field : str
+        ``"current"`` or ``"wind"``: the range's table parameter (its bounds) and the name in error messages.
+
+    Returns
+    -------
+    (float, float)
+        ``(low, high)``; an :class:`~mmg_casadi.errors.InputError` if ``text`` is not a range or
+        ``low <= high`` within the parameter's bounds does not hold.
 
     Examples
     --------

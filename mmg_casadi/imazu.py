@@ -118,6 +118,23 @@ def run_imazu(method: str, targets: str = "hold", *, cases=tuple(CASES), params:
     distance of any ship), ``reached_goal``, ``min_distance`` (L, own ship to its nearest target), ``collided``
     and ``result`` (the :class:`~mmg_casadi.scenario_run.ScenarioResult`).
 
+    Parameters
+    ----------
+    method : str
+        Guidance method of the own ship (one of :data:`mmg_casadi.methods.METHODS`).
+    targets : str, optional
+        ``"hold"`` (default): targets keep course and speed; ``"avoid"``: they use ``method`` too.
+    cases : iterable of int, optional
+        Problem numbers to run, each 1 to 22, in this order; default all 22.
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`), passed to
+        :func:`~mmg_casadi.scenario_run.run_scenario`.
+
+    Returns
+    -------
+    list of dict
+        One row per case, as described above.
+
     Examples
     --------
     >>> rows = run_imazu("modified-vortex", "hold", cases=(2,))
@@ -141,6 +158,23 @@ def run_imazu(method: str, targets: str = "hold", *, cases=tuple(CASES), params:
 def plot_imazu(rows: list[dict], path=None, *, title: str | None = None, ncols: int = 6) -> Figure:
     """Grid of small trajectory plots, one per case of :func:`run_imazu` (own ship blue), titled with the case,
     the own ship's minimum distance and whether it was safe.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`run_imazu` (each needs ``case``, ``safe``, ``collided``, ``min_distance`` and
+        ``result``), one panel each, in order.
+    path : str or os.PathLike, optional
+        If given, the figure is also saved there (110 dpi; the format follows the suffix).
+    title : str, optional
+        Title above the grid.
+    ncols : int, optional
+        Panels per row (default 6); unused panels of the last row are blank.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not attached to pyplot).
 
     Examples
     --------

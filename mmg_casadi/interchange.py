@@ -109,6 +109,13 @@ def _wrap(angle_deg: float) -> float:
 class LocalPlane:
     """Local tangent plane (x north, y east, metres) at the reference ``lat``, ``lon`` [deg] on WGS-84.
 
+    Parameters
+    ----------
+    lat : float
+        Latitude of the reference point (the plane's origin) [deg, WGS-84, north positive], in [-90, 90].
+    lon : float
+        Longitude of the reference point [deg, WGS-84, east positive], in [-180, 180].
+
     Examples
     --------
     >>> plane = LocalPlane(58.61, 10.59)
@@ -127,13 +134,41 @@ class LocalPlane:
         return _ecef(self.lat, self.lon), _neu(self.lat, self.lon)
 
     def to_plane(self, lat: float, lon: float) -> tuple[float, float]:
-        """(x north, y east) [m] of a point on the ellipsoid."""
+        """(x north, y east) [m] of a point on the ellipsoid.
+
+        Parameters
+        ----------
+        lat : float
+            Latitude of the point [deg, WGS-84].
+        lon : float
+            Longitude of the point [deg, WGS-84].
+
+        Returns
+        -------
+        (float, float)
+            The point's projection on the plane: metres north and east of the reference.
+        """
         origin, neu = self._frame()
         d = neu @ (_ecef(lat, lon) - origin)
         return float(d[0]), float(d[1])
 
     def to_geodetic(self, x: float, y: float) -> tuple[float, float]:
-        """(lat, lon) [deg] of the point on the ellipsoid whose projection on the plane is (x, y)."""
+        """(lat, lon) [deg] of the point on the ellipsoid whose projection on the plane is (x, y).
+
+        The inverse of :meth:`to_plane` (to < 1 mm; a fixed-point iteration over the height above the plane).
+
+        Parameters
+        ----------
+        x : float
+            Metres north of the reference, in the plane.
+        y : float
+            Metres east of the reference, in the plane.
+
+        Returns
+        -------
+        (float, float)
+            Latitude and longitude [deg, WGS-84].
+        """
         origin, neu = self._frame()
         up = 0.0
         for _ in range(20):
@@ -145,14 +180,44 @@ class LocalPlane:
         return lat, lon
 
     def course_to_plane(self, course_deg: float, lat: float, lon: float) -> float:
-        """A course [deg from local north, clockwise] at (lat, lon) as an angle in the plane [deg from x to y]."""
+        """A course [deg from local north, clockwise] at (lat, lon) as an angle in the plane [deg from x to y].
+
+        Parameters
+        ----------
+        course_deg : float
+            Course or heading [deg from the local north at (lat, lon), clockwise].
+        lat : float
+            Latitude of the ship [deg, WGS-84].
+        lon : float
+            Longitude of the ship [deg, WGS-84].
+
+        Returns
+        -------
+        float
+            The direction in the plane [deg from x (north of the reference) towards y (east)], in [0, 360).
+        """
         c = math.radians(course_deg)
         local = _neu(lat, lon)
         v = _neu(self.lat, self.lon) @ (math.cos(c) * local[0] + math.sin(c) * local[1])
         return _wrap(math.degrees(math.atan2(v[1], v[0])))
 
     def course_from_plane(self, angle_deg: float, lat: float, lon: float) -> float:
-        """The inverse of :meth:`course_to_plane` (to ~(d/R)² rad): a plane angle as a course at (lat, lon)."""
+        """The inverse of :meth:`course_to_plane` (to ~(d/R)² rad): a plane angle as a course at (lat, lon).
+
+        Parameters
+        ----------
+        angle_deg : float
+            Direction in the plane [deg from x (north of the reference) towards y (east)].
+        lat : float
+            Latitude of the ship [deg, WGS-84].
+        lon : float
+            Longitude of the ship [deg, WGS-84].
+
+        Returns
+        -------
+        float
+            The course [deg from the local north at (lat, lon), clockwise], in [0, 360).
+        """
         a = math.radians(angle_deg)
         ref = _neu(self.lat, self.lon)
         v = _neu(lat, lon) @ (math.cos(a) * ref[0] + math.sin(a) * ref[1])
@@ -405,6 +470,19 @@ def load_traffic_situation(path, **kw) -> tuple[Scenario, LocalPlane, float]:
 
     A missing file, invalid JSON or a malformed situation raise a :class:`~mmg_casadi.errors.ScenarioError`.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The JSON file (UTF-8); also the ``source`` named in error messages.
+    **kw
+        Keyword arguments of :func:`traffic_situation_to_scenario`: ``method``, ``target_method``,
+        ``length_scale``, ``extend_past`` (not ``source``).
+
+    Returns
+    -------
+    (Scenario, LocalPlane, float)
+        The scenario, its plane (reference: the own ship's initial position) and the length unit in metres.
+
     Examples
     --------
     >>> from importlib.resources import files
@@ -436,6 +514,25 @@ def scenario_to_traffic_situation(sc: Scenario, *, reference=DEFAULT_REFERENCE, 
     KCS length by default), speeds fractions of the matching Froude-scaled design speed. Each ship's
     waypoints start with its initial position (as trafficgen writes them); obstacles and walls have no place
     in the schema and are left out.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario (positions in ship lengths, x north, y east; speeds as fractions of the design speed).
+    reference : (float, float), optional
+        Latitude and longitude [deg, WGS-84] of the scenario's origin, lat in [-90, 90] and lon in
+        [-180, 180]; default :data:`DEFAULT_REFERENCE`.
+    unit_m : float, optional
+        Metres per ship length (> 0), also written as every ship's length; the KCS length (230 m) if None.
+        Speeds are scaled with the design speed Froude-scaled to this length (24 kn at 230 m).
+    title : str, optional
+        The situation's ``title``.
+
+    Returns
+    -------
+    dict
+        The traffic situation (``version``, ``title``, ``description``, ``ownShip`` = the first ship,
+        ``targetShips`` = the others), ready for :func:`json.dumps`.
 
     Examples
     --------
@@ -478,12 +575,37 @@ def scenario_to_traffic_situation(sc: Scenario, *, reference=DEFAULT_REFERENCE, 
 
 
 def dump_traffic_situation(sc: Scenario, **kw) -> str:
-    """:func:`scenario_to_traffic_situation` as JSON text."""
+    """:func:`scenario_to_traffic_situation` as JSON text.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario to write.
+    **kw
+        Keyword arguments of :func:`scenario_to_traffic_situation`: ``reference``, ``unit_m``, ``title``.
+
+    Returns
+    -------
+    str
+        The JSON text (indented by 2, with a final newline).
+    """
     return json.dumps(scenario_to_traffic_situation(sc, **kw), indent=2) + "\n"
 
 
 def scenario_header(plane: LocalPlane, unit_m: float) -> str:
     """A TOML comment recording the reference of a converted scenario (read back by :func:`read_header`).
+
+    Parameters
+    ----------
+    plane : LocalPlane
+        The plane the scenario is drawn in; its reference ``lat``, ``lon`` [deg] are recorded.
+    unit_m : float
+        The length unit [m per ship length] of the scenario.
+
+    Returns
+    -------
+    str
+        Two comment lines, each ending with a newline, to be put before the scenario's TOML text.
 
     Examples
     --------
@@ -496,6 +618,17 @@ def scenario_header(plane: LocalPlane, unit_m: float) -> str:
 
 def read_header(text: str):
     """(lat, lon, length_m) from a :func:`scenario_header` comment in ``text``, or None.
+
+    Parameters
+    ----------
+    text : str
+        Text of a scenario TOML file; the first header line anywhere in it counts.
+
+    Returns
+    -------
+    (float, float, float) or None
+        Reference latitude and longitude [deg] and the length unit [m]; None if there is no header line or
+        one of its numbers is not a finite float.
 
     Examples
     --------
@@ -513,14 +646,44 @@ def read_header(text: str):
 
 
 def json_to_toml_text(path, **kw) -> str:
-    """Scenario-file TOML text (with its reference header) of a maritime-schema JSON file."""
+    """Scenario-file TOML text (with its reference header) of a maritime-schema JSON file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The maritime-schema JSON file.
+    **kw
+        Keyword arguments of :func:`traffic_situation_to_scenario`: ``method``, ``target_method``,
+        ``length_scale``, ``extend_past``.
+
+    Returns
+    -------
+    str
+        The :func:`scenario_header` comment followed by the scenario (:func:`~mmg_casadi.scenario.dump_scenario`).
+    """
     sc, plane, unit = load_traffic_situation(path, **kw)
     return scenario_header(plane, unit) + dump_scenario(sc)
 
 
 def toml_to_json_text(path, *, reference=None) -> str:
     """maritime-schema JSON text of a scenario TOML file, about ``reference`` = (lat, lon), else the reference
-    recorded in the file's header, else :data:`DEFAULT_REFERENCE`."""
+    recorded in the file's header, else :data:`DEFAULT_REFERENCE`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The scenario TOML file (UTF-8); its name without suffix becomes the situation's ``title``.
+    reference : (float, float), optional
+        Latitude and longitude [deg] of the scenario's origin. If None, the file's :func:`scenario_header`
+        supplies the reference and the length unit; without a header the reference is
+        :data:`DEFAULT_REFERENCE` and the unit the KCS length (230 m). A given ``reference`` always uses the
+        KCS length, even if the file has a header.
+
+    Returns
+    -------
+    str
+        The JSON text (:func:`dump_traffic_situation`).
+    """
     from .scenario import load_scenario
     sc = load_scenario(path)
     header = read_header(Path(path).read_text(encoding="utf-8"))
@@ -533,6 +696,18 @@ def toml_to_json_text(path, *, reference=None) -> str:
 
 def parse_reference(text):
     """``"LAT,LON"`` [deg] as a (lat, lon) tuple (None stays None).
+
+    Parameters
+    ----------
+    text : str or None
+        Two numbers separated by one comma (spaces allowed), latitude in [-90, 90] and longitude in
+        [-180, 180] degrees, as given to ``--reference``; anything else raises a
+        :class:`~mmg_casadi.errors.ScenarioError`.
+
+    Returns
+    -------
+    (float, float) or None
+        ``(lat, lon)``, or None if ``text`` is None.
 
     Examples
     --------
@@ -562,6 +737,23 @@ def convert_file(src, out, *, method: str = "modified-vortex", target_method: st
 
     The output is written only if the conversion succeeds (a temporary file, then a rename). ``reference``
     (``"LAT,LON"`` or a tuple) applies to TOML → JSON; the other keywords to JSON → TOML.
+
+    Parameters
+    ----------
+    src : str or os.PathLike
+        The input file: a ``.json`` traffic situation or a ``.toml`` scenario (suffix case-insensitive).
+    out : str or os.PathLike
+        The output file, with the other suffix (``.toml`` for a JSON input, ``.json`` for a TOML one); its
+        directory is created if needed.
+    method : str, optional
+        Collision-avoidance method of the own ship (JSON → TOML), one of :data:`~mmg_casadi.methods.METHODS`.
+    target_method : str, optional
+        Method of the target ships (JSON → TOML); ``"none"``: they do not avoid anyone.
+    length_scale : str, optional
+        ``"kcs"`` or ``"own-ship"`` (JSON → TOML), see :func:`traffic_situation_to_scenario`.
+    reference : str or (float, float), optional
+        Latitude and longitude [deg] of the scenario's origin (TOML → JSON), ``"LAT,LON"``
+        (:func:`parse_reference`) or a tuple; None: the file's header, else :data:`DEFAULT_REFERENCE`.
 
     Returns
     -------

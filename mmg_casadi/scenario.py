@@ -71,6 +71,7 @@ ENVIRONMENT_KEYS = {"current_speed": "current_speed", "current_direction": "curr
                     "crab_compensation": "crab_compensation"}
 """Keys of the optional ``[environment]`` table and the table parameter each one sets."""
 SPEED_RANGE = (0.2, 1.2)
+"""Allowed ``speed`` of a ship (``[[ships]]`` table), (low, high) as fractions of the design speed, inclusive."""
 SHIP_HALF_LENGTH = 0.5
 
 _POINT = "a point [x, y] of two finite numbers (ship lengths)"
@@ -248,6 +249,17 @@ class Scenario:
 
 def toml_key(k: str) -> str:
     r"""``k`` as written in a dotted TOML key: bare if it may be, else a quoted string (so it fits on one line).
+
+    Parameters
+    ----------
+    k : str
+        One key (one part of a dotted key). It stays bare if it is non-empty and only ASCII letters, digits,
+        ``_`` and ``-``; otherwise it becomes a JSON-escaped (hence valid TOML basic) string in double quotes.
+
+    Returns
+    -------
+    str
+        The key as TOML text.
 
     Examples
     --------

@@ -35,6 +35,12 @@ PARENT_POLL_INTERVAL = 1.0
 class Terminated(KeyboardInterrupt):
     """A termination signal received while :func:`terminate_as_interrupt` was active.
 
+    Parameters
+    ----------
+    signum : int
+        Number of the signal received (e.g. ``signal.SIGTERM``), kept as the attribute ``signum``; the
+        exception's message is the signal's name (``"SIGTERM"``). It must be a valid signal number.
+
     Examples
     --------
     >>> err = Terminated(signal.SIGTERM)
@@ -52,6 +58,17 @@ def exit_status(err: BaseException) -> int:
 
     A plain :class:`KeyboardInterrupt` is Ctrl-C (SIGINT, 130).
 
+    Parameters
+    ----------
+    err : BaseException
+        The interruption: a :class:`Terminated` (or any exception with a ``signum`` attribute) or a plain
+        :class:`KeyboardInterrupt` (taken as SIGINT).
+
+    Returns
+    -------
+    int
+        ``128 + signum``: 130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP.
+
     Examples
     --------
     >>> exit_status(KeyboardInterrupt()), exit_status(Terminated(signal.SIGTERM))
@@ -64,6 +81,17 @@ def exit_status(err: BaseException) -> int:
 
 def signal_name(err: BaseException) -> str:
     """Name of the signal behind an interruption (``"SIGINT"`` for a plain :class:`KeyboardInterrupt`).
+
+    Parameters
+    ----------
+    err : BaseException
+        The interruption: a :class:`Terminated` (or any exception with a ``signum`` attribute) or a plain
+        :class:`KeyboardInterrupt` (taken as SIGINT).
+
+    Returns
+    -------
+    str
+        The signal's name, e.g. ``"SIGTERM"``.
 
     Examples
     --------
@@ -80,6 +108,16 @@ def terminate_as_interrupt(signals=TERMINATION_SIGNALS):
     Further termination signals are ignored while the interruption unwinds (so the cleanup that stops the
     workers and keeps the finished rows is not itself interrupted); the previous handlers are restored on exit.
     Outside the main thread (where Python cannot install handlers) the block runs unchanged.
+
+    Parameters
+    ----------
+    signals : iterable of int, optional
+        Signal numbers to handle; default :data:`TERMINATION_SIGNALS` (SIGTERM and SIGHUP).
+
+    Yields
+    ------
+    None
+        Nothing; the block runs with the handlers installed.
 
     Examples
     --------
@@ -113,6 +151,20 @@ def terminate_as_interrupt(signals=TERMINATION_SIGNALS):
 def keep_termination_handlers(signals=TERMINATION_SIGNALS):
     """Undo changes made within the block to the handlers of ``signals`` (e.g. by ``ray.init``, which installs
     its own SIGTERM handler that exits without the resume message).
+
+    Outside the main thread (where Python cannot install handlers) the block runs unchanged. A handler that was
+    not installed from Python (``signal.getsignal`` gives None) is not restored.
+
+    Parameters
+    ----------
+    signals : iterable of int, optional
+        Signal numbers whose handlers are saved on entry and restored on exit; default
+        :data:`TERMINATION_SIGNALS` (SIGTERM and SIGHUP).
+
+    Yields
+    ------
+    None
+        Nothing; the block runs unchanged.
 
     Examples
     --------
@@ -158,6 +210,13 @@ def worker_initializer(parent_pid: int) -> None:
     Pass the parent's pid (``os.getpid()`` in the parent, before the pool starts): if the parent died between
     the fork and this call the worker exits at once.
 
+    Parameters
+    ----------
+    parent_pid : int
+        Process id of the parent (the process that creates the pool), passed through ``initargs``. On Linux
+        the worker gets SIGTERM when its parent dies (``prctl(PR_SET_PDEATHSIG)``); elsewhere a daemon thread
+        checks every :data:`PARENT_POLL_INTERVAL` s whether ``os.getppid()`` still equals ``parent_pid``.
+
     Examples
     --------
     >>> from concurrent.futures import ProcessPoolExecutor
@@ -179,6 +238,15 @@ def worker_initializer(parent_pid: int) -> None:
 def stop_pool(pool, timeout: float = 5.0) -> None:
     """Stop a ``concurrent.futures.ProcessPoolExecutor`` at once: drop queued tasks, terminate its workers
     (SIGTERM; with :func:`worker_initializer` they exit immediately) and reap them (``timeout`` s each).
+
+    Parameters
+    ----------
+    pool : concurrent.futures.ProcessPoolExecutor
+        The pool to stop. Its worker processes are read from the executor's private ``_processes`` mapping
+        (none if it has no such attribute, in which case the pool is only shut down without waiting).
+    timeout : float, optional
+        Seconds to wait for each worker process to exit after SIGTERM (``Process.join``); default 5. A worker
+        still alive after that is left running.
 
     Examples
     --------
