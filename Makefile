@@ -40,6 +40,7 @@ docs: $(DOCS_STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/guidance_calls.py
 	$(BIN)/python benchmarks/statistics_throughput.py
+	$(BIN)/python benchmarks/against_commit.py
 
 clean:
 	rm -rf out .pytest_cache docs/_build docs/_generated docs/_autosummary docs/notebooks

@@ -8,7 +8,7 @@ also compiles both versions' closed loops into the shared cache). Prints per cel
 ratio B/A (the speed-up), the projected full study (5 000 runs per cell over ``--cores`` cores) for both, and
 checks that both versions give the same success/failure per run.
 
-Usage: ``python benchmarks/against_commit.py [--baseline 79ba6c0] [--runs 256] [--envs 1,5] [--repeats 3]``
+Usage: ``python benchmarks/against_commit.py [--baseline 79ba6c0] [--runs 256] [--envs 1,5] [--repeats 3] [--params JSON]``
 """
 
 from __future__ import annotations
@@ -26,22 +26,25 @@ ROOT = Path(__file__).resolve().parents[1]
 PAPER_RUNS_PER_CELL = 5000
 
 WORKLOAD = r"""
-import json, sys, time
+import inspect, json, sys, time
 import mmg_casadi.montecarlo as mc
 env, method, n, seed = int(sys.argv[1]), sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
-mc.prepare_layouts([mc.layout_for(env, method)], 1)
+params = json.loads(sys.argv[5])
+kw = {"params": params} if "params" in inspect.signature(mc.run_batch).parameters else {}
+mc.prepare_layouts([mc.layout_for(env, method, **kw)], 1)
 t0 = time.perf_counter()
 rows = []
 for s in range(0, n, mc.DEFAULT_BATCH):
-    rows += mc.run_batch(env, method, range(s, min(n, s + mc.DEFAULT_BATCH)), seed)
+    rows += mc.run_batch(env, method, range(s, min(n, s + mc.DEFAULT_BATCH)), seed, **kw)
 wall = time.perf_counter() - t0
 print(json.dumps({"wall": wall, "outcomes": [[r["run"], bool(r["success"]), r["failure"]] for r in rows]}))
 """
 
 
-def _run(path: Path, env: int, method: str, runs: int, seed: int) -> dict:
+def _run(path: Path, env: int, method: str, runs: int, seed: int, params: dict) -> dict:
     env_vars = {**os.environ, "PYTHONPATH": str(path)}
-    out = subprocess.run([sys.executable, "-c", WORKLOAD, str(env), method, str(runs), str(seed)], cwd=path,
+    out = subprocess.run([sys.executable, "-c", WORKLOAD, str(env), method, str(runs), str(seed),
+                          json.dumps(params)], cwd=path,
                          env=env_vars, capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -61,6 +64,9 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--cores", type=int, default=os.cpu_count() or 1, help="cores of the projected full study")
+    ap.add_argument("--params", default='{"vo_cone": "wide", "vo_hold": false}',
+                    help="JSON parameter overrides for the current code (default: the velocity obstacle as the "
+                    "baseline commit defined it, so both run the same algorithm)")
     a = ap.parse_args(argv)
     envs = [int(e) for e in a.envs.split(",")]
     methods = [m for m in a.methods.split(",") if m]
@@ -78,7 +84,7 @@ def main(argv=None) -> int:
                     outcomes = {}
                     for k in range(a.repeats + 1):
                         for name, path in (("current", ROOT), ("baseline", base)):
-                            r = _run(path, e, m, a.runs, a.seed)
+                            r = _run(path, e, m, a.runs, a.seed, json.loads(a.params) if name == "current" else {})
                             if k:
                                 times[name].append(r["wall"])
                             outcomes[name] = r["outcomes"]
