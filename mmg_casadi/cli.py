@@ -24,7 +24,7 @@ from .io import write_json
 from .params import PARAMETERS, check_value, help_text, load_file, markdown_table
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
-STUDIES = QUICK_STUDIES + ("statistics", "all")
+STUDIES = QUICK_STUDIES + ("statistics", "sweep", "all")
 _FLAGS = {"base_seed": "--seed", "out_dir": "--out"}
 """Library argument names whose flag is not ``--`` + the name with dashes."""
 
@@ -125,6 +125,15 @@ def build_parser() -> argparse.ArgumentParser:
             sp.add_argument("--backend", default="local", help="local | ray")
             sp.add_argument("--address", default=None, help="Ray cluster address (with --backend ray)")
             sp.add_argument("--workers", type=_int, default=None, help="local worker processes / Ray CPUs")
+        if name == "sweep":
+            sp.add_argument("--param", required=True, help="the swept parameter (see `mmg-casadi params`)")
+            sp.add_argument("--values", required=True, help="comma-separated values, e.g. 10,15,20,25")
+            sp.add_argument("--baseline", default=None, help="value the others are paired against "
+                            "(default: the parameter's default)")
+            sp.add_argument("--runs", type=_int, default=200, help="runs per environment, method and value")
+            sp.add_argument("--envs", default="5", help="environments, e.g. 5 or 3-5")
+            sp.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
+            sp.add_argument("--workers", type=_int, default=None, help="local worker processes")
 
     t = sub.add_parser("tune", help="controller and field tuning")
     tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf}")
@@ -135,8 +144,14 @@ def build_parser() -> argparse.ArgumentParser:
     tp.add_argument("--wn", type=_float, default=None, help="natural frequency [U/L] (default: from the gear)")
     tp.add_argument("--out", type=Path, required=True, help="output directory")
     ta = tunes.add_parser("apf", help="gradient-based tuning of the modified sink-vortex field")
-    ta.add_argument("--train", type=_int, default=8, help="sampled training scenarios (plus the paper's five)")
-    ta.add_argument("--holdout", type=_int, default=40, help="held-out scenarios per environment")
+    ta.add_argument("--train", type=_int, default=195, help="sampled training scenarios, environments 3-5 "
+                    "(plus the paper's five)")
+    ta.add_argument("--holdout", type=_int, default=2000, help="held-out runs per environment and parameter set")
+    ta.add_argument("--holdout-envs", dest="holdout_envs", default="1-5", help="environments of the held-out study")
+    ta.add_argument("--starts", type=_int, default=1, help="L-BFGS-B starts from the best grid points")
+    ta.add_argument("--grid", type=_int, default=3, help="coarse grid points per tuned parameter")
+    ta.add_argument("--max-iter", dest="max_iter", type=_int, default=8, help="L-BFGS-B iterations per start")
+    ta.add_argument("--workers", type=_int, default=None, help="worker processes of the held-out study")
     _add_params(ta)
     ta.add_argument("--out", type=Path, required=True, help="output directory")
 
@@ -198,6 +213,9 @@ def _study(a) -> dict:
         if n == "statistics":
             kw.update(runs=a.runs, envs=a.envs, base_seed=a.seed, backend=a.backend, address=a.address,
                       workers=a.workers)
+        if n == "sweep":
+            kw.update(param=a.param, values=a.values, baseline=a.baseline, runs=a.runs, envs=a.envs,
+                      base_seed=a.seed, workers=a.workers)
         out[n] = mod.run(target, **kw)
     return out
 
@@ -207,7 +225,11 @@ def _tune(a) -> dict:
         from tuning import cli_pd
         return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn)
     from tuning import cli_apf
-    return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a))
+    from .sampling import parse_envs
+    envs = tuple(parse_envs(a.holdout_envs))
+    return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a), envs=envs,
+                       target=(5,) if 5 in envs else envs[-1:], starts=a.starts, grid=a.grid,
+                       max_iter=a.max_iter, workers=a.workers)
 
 
 def _params(a) -> dict:
