@@ -230,6 +230,7 @@ def plot_sweep(table: list, param: str, path) -> Figure:
     ax2.set_xlabel(param)
     ax2.set_ylabel("failed runs")
     ax2.grid(True, alpha=0.3)
-    ax2.legend(fontsize=8)
+    if ax2.get_legend_handles_labels()[0]:
+        ax2.legend(fontsize=8)
     fig.savefig(path, dpi=110)
     return fig
