@@ -142,6 +142,9 @@ def build_parser() -> argparse.ArgumentParser:
     tp.add_argument("--speed", type=_float, default=1.0, help="speed / design speed, [0.2, 1.2]")
     tp.add_argument("--zeta", type=_float, default=None, help="damping ratio (default 0.8)")
     tp.add_argument("--wn", type=_float, default=None, help="natural frequency [U/L] (default: from the gear)")
+    tp.add_argument("--tracking-tolerance", dest="tracking_tolerance", type=_float, default=0.0,
+                    help="recommended gains may track the waypoint square this much worse (relative CE, MCTE) "
+                    "than the paper's gains (default 0)")
     tp.add_argument("--out", type=Path, required=True, help="output directory")
     ta = tunes.add_parser("apf", help="gradient-based tuning of the modified sink-vortex field")
     ta.add_argument("--train", type=_int, default=195, help="sampled training scenarios, environments 3-5 "
@@ -223,7 +226,7 @@ def _study(a) -> dict:
 def _tune(a) -> dict:
     if a.what == "pd":
         from tuning import cli_pd
-        return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn)
+        return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn, tracking_tolerance=a.tracking_tolerance)
     from tuning import cli_apf
     from .sampling import parse_envs
     envs = tuple(parse_envs(a.holdout_envs))

@@ -17,8 +17,8 @@ objective only when its soft-min approach comes within roughly ``d_safe + 2/β``
 Monte Carlo study counts — while CE and MCTE are small secondary terms that break ties among safe sets.
 
 Gradients are exact: the rollout carries forward sensitivities. One *augmented step*
-``z = [x; acc; ∂x/∂θ; ∂acc/∂θ] ↦ z⁺`` is built symbolically (CasADi forward AD, ``jtimes`` with one direction
-per tuned parameter), compiled to native code once per layout (disk cache of :mod:`mmg_casadi.compiled`),
+``z = [x; acc; ∂x/∂θ; ∂acc/∂θ] ↦ z⁺`` is built symbolically (CasADi forward AD, ``jtimes`` with one
+direction per tuned parameter), compiled to native code once per layout (disk cache of :mod:`mmg_casadi.compiled`),
 ``map``-ped over the scenarios of a layout and ``mapaccum``-ed over steps in chunks; the soft-min, softplus
 and normalisations are applied in closed form to the final accumulators and their sensitivities. (A
 reverse-mode gradient of the MX rollout in CasADi's virtual machine — the approach of :mod:`tuning.apf` —
