@@ -77,3 +77,15 @@ def test_search_finds_the_minimum_and_resumes_without_recomputing(tmp_path):
     again = _Stub()
     search.search(again, tmp_path / "b", grid_n=3, starts=1, max_iter=20)
     assert again.calls == 0
+
+
+def test_resume_refuses_other_objective_settings(tmp_path):
+    from mmg_casadi.errors import InputError
+    from tuning.cli_apf import _check_settings
+    f = tmp_path / "tuning.json"
+    a = {"config": {**safety.SafetyConfig().__dict__}, "train": 10}
+    _check_settings(f, a)
+    _check_settings(f, a)                      # same settings: resume allowed
+    b = {"config": {**safety.SafetyConfig(w_mcte=0.1).__dict__}, "train": 10}
+    with pytest.raises(InputError, match="config"):
+        _check_settings(f, b)

@@ -121,6 +121,18 @@ def heldout(out, sets: dict, *, runs: int, envs, base_seed: int, workers=None) -
     return res
 
 
+def _check_settings(path: Path, settings: dict) -> None:
+    """Record the settings of the training objective in ``path``; refuse to resume a directory whose stored
+    evaluations were made with other settings (the evaluation log is keyed by θ only)."""
+    import json
+    if path.exists():
+        stored = json.loads(path.read_text(encoding="utf-8"))
+        if stored != json.loads(json.dumps(settings)):
+            key = next((k for k in settings if stored.get(k) != json.loads(json.dumps(settings[k]))), "config")
+            raise InputError("out", f"a new directory, or the {key!r} that {path} records", str(path.parent))
+    write_json(path, settings)
+
+
 def _markdown(report: dict) -> str:
     j = report["judgement"]
     lines = [f"# tune apf: verdict **{j['verdict']}**", "",
@@ -191,6 +203,9 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
     timings = {}
     t_start = time.perf_counter()
 
+    _check_settings(out / "tuning.json", {"config": {**config.__dict__}, "train": train,
+                                          "train_envs": list(TRAIN_ENVS), "train_seed": apf.TRAIN_SEED,
+                                          "params": extra})
     _say(f"[1/4] training set: 5 paper encounters + {train} sampled scenarios (environments "
          f"{','.join(map(str, TRAIN_ENVS))}, seed {apf.TRAIN_SEED})")
     t0 = time.perf_counter()
