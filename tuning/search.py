@@ -27,6 +27,11 @@ from mmg_casadi.progress import Progress
 from .safety import BOUNDS, PAPER, THETA, SafetyObjective
 
 
+class _Budget(Exception):
+    """Raised inside the objective when a start has used its evaluations (L-BFGS-B's own ``maxfun`` is only
+    checked between iterations, and its line searches may evaluate many more points)."""
+
+
 class EvaluationLog:
     """Evaluations of the objective, kept in ``path`` (JSON lines) and replayed on resume.
 
@@ -120,7 +125,8 @@ def search(objective: SafetyObjective, out, *, grid_n: int = 3, starts: int = 1,
     starts : int
         Local searches, from the best grid points.
     max_iter : int
-        L-BFGS-B iterations per start (each costs ≥ 1 evaluation).
+        L-BFGS-B iterations per start (each costs ≥ 1 evaluation; at most ``3 max_iter + 3`` evaluations per
+        start).
     report : callable, optional
         Receives progress lines.
 
@@ -135,7 +141,8 @@ def search(objective: SafetyObjective, out, *, grid_n: int = 3, starts: int = 1,
             raise InputError(name, f"an integer >= {low}", v)
     log = EvaluationLog(Path(out) / "evaluations.jsonl")
     pts = grid(grid_n)
-    budget = len(pts) + starts * (max_iter + 3)
+    per_start = 3 * max_iter + 3
+    budget = len(pts) + starts * per_start
     bar = Progress(budget, desc="tune apf evaluations", unit="evals")
     stats = {"new": 0, "replayed": 0, "seconds": 0.0}
 
@@ -175,16 +182,25 @@ def search(objective: SafetyObjective, out, *, grid_n: int = 3, starts: int = 1,
             z0 = (np.array(ranked[s]["theta"]) - lb) / span
             n_eval = [0]
 
+            seen = []
+
             def fun(z):
+                if n_eval[0] >= per_start:
+                    raise _Budget
                 n_eval[0] += 1
                 rec = evaluate(lb + span * np.clip(z, 0.0, 1.0), f"start {s + 1} eval {n_eval[0]}")
+                seen.append(rec)
                 return rec["objective"], np.array(rec["gradient"]) * span
 
-            res = minimize(fun, z0, jac=True, method="L-BFGS-B", bounds=[(0.0, 1.0)] * len(THETA),
-                           options={"maxiter": max_iter, "maxfun": max_iter + 3})
-            theta = (lb + span * np.clip(res.x, 0, 1)).tolist()
-            results.append({"from": ranked[s]["theta"], "to": theta, "objective": float(res.fun),
-                            "status": str(res.message), "evaluations": n_eval[0]})
+            try:
+                res = minimize(fun, z0, jac=True, method="L-BFGS-B", bounds=[(0.0, 1.0)] * len(THETA),
+                               options={"maxiter": max_iter, "maxfun": max_iter + 3})
+                status = str(res.message)
+            except _Budget:
+                status = f"stopped after {per_start} evaluations (line searches)"
+            end = min(seen, key=lambda r: r["objective"])
+            results.append({"from": ranked[s]["theta"], "to": end["theta"], "objective": end["objective"],
+                            "status": status, "evaluations": n_eval[0]})
     finally:
         bar.close()
     allrecs = list(log.records.values())
