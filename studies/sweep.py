@@ -51,7 +51,7 @@ def parse_values(param: str, text) -> list:
     [10.0, 15.0, 20.0]
     """
     if param not in PARAMETERS:
-        raise InputError("param", f"a parameter name (see `mmg-casadi params`)", param)
+        raise InputError("param", "a parameter name (see `mmg-casadi params`)", param)
     items = [v.strip() for v in text.split(",")] if isinstance(text, str) else list(text)
     if not items or any(v == "" for v in items):
         raise InputError("values", "a comma-separated list of values", text)
