@@ -30,7 +30,7 @@ extensions = [
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
-exclude_patterns = ["_build", "_generated", "claims.md", "gallery/*.py", "**.ipynb_checkpoints", "Thumbs.db",
+exclude_patterns = ["_build", "_generated", "claims.md", "results", "gallery/*.py", "**.ipynb_checkpoints", "Thumbs.db",
                     ".DS_Store"]
 templates_path = ["_templates"]
 

@@ -24,7 +24,7 @@ from .io import write_json
 from .params import PARAMETERS, check_value, help_text, load_file, markdown_table
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
-STUDIES = QUICK_STUDIES + ("imazu", "disturbance", "statistics", "paper", "all")
+STUDIES = QUICK_STUDIES + ("imazu", "disturbance", "statistics", "sweep", "paper", "all")
 _FLAGS = {"base_seed": "--seed", "out_dir": "--out"}
 """Library argument names whose flag is not ``--`` + the name with dashes."""
 
@@ -142,6 +142,15 @@ def build_parser() -> argparse.ArgumentParser:
                             "(fraction of design speed, direction uniform), e.g. 0-0.1")
             sp.add_argument("--wind", default=None, metavar="LO-HI", help="per-run true wind speed range (m/s, "
                             "direction uniform), e.g. 0-15")
+        if name == "sweep":
+            sp.add_argument("--param", required=True, help="the swept parameter (see `mmg-casadi params`)")
+            sp.add_argument("--values", required=True, help="comma-separated values, e.g. 10,15,20,25")
+            sp.add_argument("--baseline", default=None, help="value the others are paired against "
+                            "(default: the parameter's default)")
+            sp.add_argument("--runs", type=_int, default=200, help="runs per environment, method and value")
+            sp.add_argument("--envs", default="5", help="environments, e.g. 5 or 3-5")
+            sp.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
+            sp.add_argument("--workers", type=_int, default=None, help="local worker processes")
 
     t = sub.add_parser("tune", help="controller and field tuning")
     tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf}")
@@ -150,10 +159,19 @@ def build_parser() -> argparse.ArgumentParser:
     tp.add_argument("--speed", type=_float, default=1.0, help="speed / design speed, [0.2, 1.2]")
     tp.add_argument("--zeta", type=_float, default=None, help="damping ratio (default 0.8)")
     tp.add_argument("--wn", type=_float, default=None, help="natural frequency [U/L] (default: from the gear)")
+    tp.add_argument("--tracking-tolerance", dest="tracking_tolerance", type=_float, default=0.0,
+                    help="recommended gains may track the waypoint square this much worse (relative CE, MCTE) "
+                    "than the paper's gains (default 0)")
     tp.add_argument("--out", type=Path, required=True, help="output directory")
     ta = tunes.add_parser("apf", help="gradient-based tuning of the modified sink-vortex field")
-    ta.add_argument("--train", type=_int, default=8, help="sampled training scenarios (plus the paper's five)")
-    ta.add_argument("--holdout", type=_int, default=40, help="held-out scenarios per environment")
+    ta.add_argument("--train", type=_int, default=195, help="sampled training scenarios, environments 3-5 "
+                    "(plus the paper's five)")
+    ta.add_argument("--holdout", type=_int, default=2000, help="held-out runs per environment and parameter set")
+    ta.add_argument("--holdout-envs", dest="holdout_envs", default="1-5", help="environments of the held-out study")
+    ta.add_argument("--starts", type=_int, default=1, help="L-BFGS-B starts from the best grid points")
+    ta.add_argument("--grid", type=_int, default=3, help="coarse grid points per tuned parameter")
+    ta.add_argument("--max-iter", dest="max_iter", type=_int, default=8, help="L-BFGS-B iterations per start")
+    ta.add_argument("--workers", type=_int, default=None, help="worker processes of the held-out study")
     _add_params(ta)
     ta.add_argument("--out", type=Path, required=True, help="output directory")
 
@@ -236,6 +254,9 @@ def _study(a) -> dict:
             kw.update(targets=a.targets)
         if n == "paper":
             kw.update(runs=a.runs, base_seed=a.seed, workers=a.workers)
+        if n == "sweep":
+            kw.update(param=a.param, values=a.values, baseline=a.baseline, runs=a.runs, envs=a.envs,
+                      base_seed=a.seed, workers=a.workers)
         out[n] = mod.run(target, **kw)
     return out
 
@@ -243,9 +264,13 @@ def _study(a) -> dict:
 def _tune(a) -> dict:
     if a.what == "pd":
         from tuning import cli_pd
-        return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn)
+        return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn, tracking_tolerance=a.tracking_tolerance)
     from tuning import cli_apf
-    return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a))
+    from .sampling import parse_envs
+    envs = tuple(parse_envs(a.holdout_envs))
+    return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a), envs=envs,
+                       target=(5,) if 5 in envs else envs[-1:], starts=a.starts, grid=a.grid,
+                       max_iter=a.max_iter, workers=a.workers)
 
 
 def _convert(a) -> dict:

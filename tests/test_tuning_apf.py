@@ -51,7 +51,8 @@ def test_params_toml_round_trip_and_simulate_accepts_it(tmp_path):
 
 
 @pytest.mark.parametrize("argv,field", [(["--holdout", "0"], "--holdout"), (["--holdout", "-3"], "--holdout"),
-                                        (["--train", "-1"], "--train")])
+                                        (["--train", "-1"], "--train"), (["--starts", "0"], "--starts"),
+                                        (["--grid", "0"], "--grid"), (["--max-iter", "0"], "--max-iter")])
 def test_bad_counts_exit_2(tmp_path, capsys, argv, field):
     out = tmp_path / "o"
     assert main(["tune", "apf", *argv, "--out", str(out)]) == 2

@@ -1,5 +1,10 @@
 """Gradient-based tuning of the modified sink-vortex field: K⁰_vor, Λ_sink and R_safe.
 
+(The first version: IPOPT on CE + MCTE with a soft-min separation constraint over a dozen short scenarios.
+``mmg-casadi tune apf`` now uses the safety-aware objective of :mod:`tuning.safety` over hundreds of whole
+voyages, :mod:`tuning.search` and the paired held-out judgement of :mod:`tuning.judge`; this module still
+provides the scenario helpers, seeds and the VM-based problem, whose measurements are below.)
+
 The closed loop of every training scenario is rolled out with the *smooth* step
 (``Layout(..., smooth=s)``: every switch — R_safe activation, reactive/ILOS blend, the modified vortex's
 on/off and max(1, ·) — is a sigmoid/softplus of sharpness ``s``) over a fixed horizon with ``mapaccum``; the

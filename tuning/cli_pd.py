@@ -3,6 +3,12 @@
 Writes ``root_locus.png``, ``step.png`` (design), ``step_paper.png``, ``gain_map.png`` and ``metrics.json`` into
 ``--out``. Overshoots are in percent of the 10° heading step, times in L/U_des; the waypoint-square study runs at
 the design speed whatever ``--speed`` is.
+
+The pole-placement design (``kp``, ``kd``) is well damped but slow (it tracks the waypoint square far worse than
+the paper's gains); the *recommended* gains (``recommended`` in ``metrics.json``, :mod:`tuning.pd_tracking`)
+meet a specification that includes tracking: square CE and MCTE no worse than the paper's gains, then the
+best damping (smallest 10° step overshoot) on a (K_p, K_d) grid. ``recommended.better_damped`` says where the
+paper's gains sit: how many grid gains track as well and are better damped.
 """
 
 from __future__ import annotations
@@ -14,8 +20,9 @@ from mmg_casadi.io import write_json
 from mmg_casadi.errors import InputError, check_range
 
 from .linear import fit_nomoto_step
-from .pd import (PdSpec, design_pd, paper_gains_map, plot_gain_map, plot_root_locus, plot_step,
+from .pd import (PdSpec, analyse_gains, design_pd, paper_gains_map, plot_gain_map, plot_root_locus, plot_step,
                  verify_nonlinear)
+from .pd_tracking import design_for_tracking
 
 
 def _validate(out, speed, zeta, wn) -> tuple[float, float, float | None, Path]:
@@ -39,7 +46,8 @@ def _finite(obj):
     return obj
 
 
-def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None = None) -> dict:
+def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None = None,
+        tracking_tolerance: float = 0.0) -> dict:
     """Design, verify and plot; return (and write to ``out/metrics.json``) the metrics.
 
     Non-finite numbers are written as null.
@@ -54,8 +62,12 @@ def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None 
         Damping ratio (default 0.8).
     wn : float, optional
         Natural frequency (U/L; default: the rule of :mod:`tuning.pd`).
+    tracking_tolerance : float
+        Relative excess of the square's CE and MCTE over the paper gains' that the recommended gains may have
+        (0: at least as good; see :mod:`tuning.pd_tracking`).
     """
     speed, zeta, wn, out = _validate(out, speed, zeta, wn)
+    tracking_tolerance = check_range("tracking_tolerance", tracking_tolerance, 0.0, 1.0, cls=InputError)
     design = design_pd(speed, PdSpec(zeta=zeta, wn=wn))
     gmap = paper_gains_map(speed)
     paper = gmap.paper
@@ -115,6 +127,13 @@ def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None 
         },
         "waypoint_square": {"design": check.square, "paper_gains": check_paper.square},
     }
+    track = design_for_tracking(speed, tolerance=tracking_tolerance)
+    rec = verify_nonlinear(analyse_gains(track.kp, track.kd, speed), square=False)
+    metrics["recommended"] = {**track.to_dict(), "overshoot_nonlinear": rec.step.overshoot,
+                              "overshoot_nonlinear_opposite": rec.opposite.overshoot,
+                              "specification": f"waypoint-square CE and MCTE <= (1 + {tracking_tolerance:g}) x "
+                                               "the paper gains', then the smallest linear 10-degree step "
+                                               "overshoot (tuning/pd_tracking.py)"}
     metrics = _finite(metrics)
     write_json(out / "metrics.json", metrics)
     print(f"PD design at speed {speed:g} ({design.method}, zeta {design.zeta:g}, wn {design.wn:.4g} "
@@ -126,5 +145,10 @@ def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None 
     sq, sqp = check.square, check_paper.square
     print(f"  waypoint square: design CE {sq['ce']:.4f} MCTE {sq['mcte']:.4f} ({sq['status']}); "
           f"paper gains CE {sqp['ce']:.4f} MCTE {sqp['mcte']:.4f} ({sqp['status']})")
+    print(f"  recommended (square CE, MCTE <= (1 + {tracking_tolerance:g}) x the paper gains', best damped): "
+          f"kp = {track.kp:g}, kd = {track.kd:g}: overshoot {track.overshoot:.2f} % "
+          f"(paper {track.reference['overshoot']:.2f} %), "
+          f"square CE {track.square['ce']:.4f} MCTE {track.square['mcte']:.4f}; {track.better_damped} of "
+          f"{track.feasible} grid gains that track as well are better damped than the paper's")
     print(f"  -> {out}")
     return metrics
