@@ -22,7 +22,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.progress import Progress
+from mmg_casadi.progress import progress_bar
 
 from .safety import BOUNDS, PAPER, THETA, SafetyObjective
 
@@ -143,7 +143,7 @@ def search(objective: SafetyObjective, out, *, grid_n: int = 3, starts: int = 1,
     pts = grid(grid_n)
     per_start = 3 * max_iter + 3
     budget = len(pts) + starts * per_start
-    bar = Progress(budget, desc="tune apf evaluations", unit="evals")
+    bar = progress_bar(budget, desc="tune apf evaluations", unit="eval")
     stats = {"new": 0, "replayed": 0, "seconds": 0.0}
 
     def evaluate(theta, phase):
