@@ -32,13 +32,13 @@ def _leg(goal=(500.0, 0.0), heading=0.0, t_max=50.0, environment=None):
 
 # ------------------------------------------------------------------------------------------- calm unchanged
 
-# SHA-256 of the C source of these calm steps generated on main just before the environment was wired in (the
-# commit after 550bb8b that added common-subexpression elimination, CasADi 3.8.2): a calm layout must keep exactly
-# the calm-water closed loop (and so every paper number; tests/test_regression_runs.py checks the outcomes).
+# SHA-256 of the C source of these calm steps as generated without the environment wired in (CasADi 3.8.2; re-recorded
+# when the velocity obstacle's held heading became the last state row): a calm layout must keep exactly the
+# calm-water closed loop (and so every paper number; tests/test_regression_runs.py checks the outcomes).
 CALM_SOURCE_SHA256 = {
-    Layout(("none",)): "7944db018dde82897b6d827c6dbb00c811823cf0bf76733acab47ebc7f93588a",
+    Layout(("none",)): "fabab354d807cfe533c582c136d3edb3d0c37bb6daa4e96171581380b473fe96",
     Layout(("modified-vortex",) * 3, n_obstacles=1):
-        "74dc459c635c4ae566a7e055e0c665681d25088d6dd2ed36f60efdb3c93507be",
+        "7192f480c2be81a93b367666e2fb04a1f5db81766da912a81691f884778bbf9d",
 }
 
 
