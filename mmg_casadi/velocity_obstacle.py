@@ -299,6 +299,30 @@ def heading_feasible(own_pos, own_speed, heading, nb_pos, nb_vel, active, *, col
     """1 if the velocity ``own_speed`` (cos ψ, sin ψ) at ``heading`` ψ lies outside the cone of every active
     neighbour, else 0 (same cone test as :func:`velocity_obstacle_terms`: angle(w, l) < α and w ≠ 0).
 
+    Parameters
+    ----------
+    own_pos : sequence of float or casadi.DM, SX or MX
+        Own ship position (x, y) (L), a 2-vector.
+    own_speed : float or casadi scalar
+        Own ship speed (U), kept constant.
+    heading : float or casadi scalar
+        Heading ψ tested (rad).
+    nb_pos : array_like or casadi matrix
+        Neighbour positions (L), one column (x, y) per neighbour (2×M).
+    nb_vel : array_like or casadi matrix
+        Neighbour velocities (U), one column per neighbour (2×M).
+    active : sequence of float or casadi row
+        0/1 mask per neighbour (1×M; a scalar is repeated): only active neighbours have a cone.
+    collision_distance : float or casadi scalar
+        Combined radius D of the cones (L).
+    cone : {"huang", "wide"}
+        Cone half-angle formula (see the module notes).
+
+    Returns
+    -------
+    casadi.DM, SX or MX
+        1 if the heading is feasible, else 0 (DM for numeric inputs).
+
     Examples
     --------
     >>> import casadi as ca
@@ -329,6 +353,32 @@ def hold_heading(fresh, held, own_pos, own_speed, nb_pos, nb_vel, active, *, col
 
     ``held`` (the remembered heading) while some neighbour is active and ``held`` is feasible
     (:func:`heading_feasible`); otherwise ``fresh`` (the heading :func:`velocity_obstacle` picks now).
+
+    Parameters
+    ----------
+    fresh : float or casadi scalar
+        Heading chosen afresh at this step (rad), e.g. by :func:`velocity_obstacle`.
+    held : float or casadi scalar
+        Remembered heading (rad).
+    own_pos : sequence of float or casadi.DM, SX or MX
+        Own ship position (x, y) (L), a 2-vector.
+    own_speed : float or casadi scalar
+        Own ship speed (U) at which ``held`` is tested.
+    nb_pos : array_like or casadi matrix
+        Neighbour positions (L), one column (x, y) per neighbour (2×M).
+    nb_vel : array_like or casadi matrix
+        Neighbour velocities (U), one column per neighbour (2×M).
+    active : sequence of float or casadi row
+        0/1 mask per neighbour (1×M; a scalar is repeated): exists and lies within R_safe.
+    collision_distance : float or casadi scalar
+        Combined radius D of the cones (L).
+    cone : {"huang", "wide"}
+        Cone half-angle formula (see the module notes).
+
+    Returns
+    -------
+    casadi.DM, SX or MX
+        ``held`` or ``fresh`` (rad).
 
     Examples
     --------

@@ -233,7 +233,7 @@ def evaluate_claims(quick: dict, summary_rows: list, rows: list) -> list[dict]:
         ``metrics.json`` of the quick studies by name: ``waypoint-square``, ``static-obstacle``, ``colregs``,
         ``conflict``, ``narrow-channel``.
     summary_rows : list of dict
-        :attr:`mmg_casadi.results.Summary.rows` of the statistical analysis.
+        ``rows`` of the :class:`mmg_casadi.results.Summary` of the statistical analysis.
     rows : list of dict
         Its run rows (for the paired comparisons and the failure mechanisms).
 

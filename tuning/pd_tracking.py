@@ -67,7 +67,9 @@ class TrackingDesign:
     tolerance : float
         Relative tolerance on the tracking specification.
     candidates : int
-        Stable grid points evaluated; ``feasible``: of which met the tracking specification.
+        Stable grid points evaluated.
+    feasible : int
+        Of which met the tracking specification.
     better_damped : int
         Feasible grid points with a smaller overshoot than the reference: where the reference gains sit (0
         means no gain of the grid tracks as well and is better damped).

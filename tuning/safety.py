@@ -69,10 +69,10 @@ FLAGS = ("-O1", "-fPIC", "-shared")
 class SafetyConfig:
     """Weights and smoothing of the safety-aware training objective (see the module docstring).
 
-    Attributes
+    Parameters
     ----------
     smooth : float
-        Sigmoid sharpness ``s`` of the smooth closed loop (as :attr:`tuning.apf.TuningConfig.smooth`).
+        Sigmoid sharpness ``s`` of the smooth closed loop (as ``smooth`` of :class:`tuning.apf.TuningConfig`).
     dt : float
         Guidance step of the training rollouts (the scenarios' own 0.25).
     max_steps : int
@@ -202,13 +202,37 @@ def build_augmented_step(layout: Layout, config: SafetyConfig = SafetyConfig()) 
 
 
 def augmented_size(layout: Layout) -> int:
-    """Rows of the augmented state ``z`` of :func:`build_augmented_step`."""
+    """Rows of the augmented state ``z`` of :func:`build_augmented_step`.
+
+    Parameters
+    ----------
+    layout : Layout
+        The closed-loop layout (its state size ``nx`` sets the size).
+
+    Returns
+    -------
+    int
+        ``(nx + NACC) · (1 + nθ)``: the state, the accumulators and their sensitivities to θ.
+    """
     return (layout.nx + NACC) * (1 + len(THETA))
 
 
 @lru_cache(maxsize=16)
 def compiled_augmented_step(layout: Layout, config: SafetyConfig = SafetyConfig()) -> ca.Function:
-    """:func:`build_augmented_step` compiled natively (memoised in-process, cached on disk)."""
+    """:func:`build_augmented_step` compiled natively (memoised in-process, cached on disk).
+
+    Parameters
+    ----------
+    layout : Layout
+        A smooth layout (``smooth`` set).
+    config : SafetyConfig
+        ``kappa``, ``eps_delta``, ``eps_ye`` are used (part of the memo key).
+
+    Returns
+    -------
+    casadi.Function
+        The compiled ``(z, p) ↦ z_next``.
+    """
     return compile_function(build_augmented_step(layout, config), FLAGS)
 
 
@@ -230,7 +254,30 @@ def _rollout(layout: Layout, config: SafetyConfig, batch: int, chunk: int) -> ca
 
 @dataclass
 class SafetyCase:
-    """One training scenario prepared for the smooth augmented rollout."""
+    """One training scenario prepared for the smooth augmented rollout (made by :func:`prepare_case`).
+
+    Parameters
+    ----------
+    name : str
+        Case name.
+    layout : Layout
+        The scenario's closed-loop layout with ``smooth`` set.
+    x0 : ndarray
+        Initial closed-loop state.
+    p : ndarray
+        Numeric parameter vector of ``layout`` (``dt``, ``t_max`` and Λ_sink replaced; the θ entries are set
+        per evaluation).
+    steps : int
+        Rollout horizon in steps of ``dt``.
+    delta_max : float
+        Maximum rudder angle (rad), the normalisation of CE.
+    collision_distance : float
+        Collision distance (L); ``d_safe`` adds ``margin`` of :class:`SafetyConfig` to it.
+    exact_success : bool
+        Whether the own ship succeeds in the exact loop at the paper's values.
+    exact_d_min : float
+        The own ship's closest approach there (L).
+    """
 
     name: str
     layout: Layout          # smooth layout
@@ -344,7 +391,18 @@ class SafetyObjective:
         self.eval_time = 0.0
 
     def compile(self, report=None) -> float:
-        """Compile (or load) the augmented step of every layout; returns the seconds it took."""
+        """Compile (or load) the augmented step of every layout; returns the seconds it took.
+
+        Parameters
+        ----------
+        report : callable, optional
+            Called with a progress line (str) after each layout's step is ready; ``None`` for silence.
+
+        Returns
+        -------
+        float
+            Wall-clock seconds.
+        """
         t0 = time.perf_counter()
         for lay in self.groups:
             compiled_augmented_step(lay, self.config)
