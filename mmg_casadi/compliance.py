@@ -72,8 +72,12 @@ def own_ship_compliance(t, states, *, r_safe: float, collision_distance: float,
     states = np.asarray(states, float)
     mask = sailing_mask(states[:, :, 3])
     pos0, psi0 = states[:, 0, :2], states[:, 0, 2]
+    # a ship that never comes within R_safe of the own ship while both sail meets it in no encounter: skip the
+    # scoring of that pair (the same verdicts, at a fraction of the cost in sparse traffic)
+    dist = np.linalg.norm(states[:, 1:, :2] - pos0[:, None, :], axis=2)
+    near = np.any((dist <= r_safe) & mask[:, :1] & mask[:, 1:], axis=0)
     verdicts = []
-    for j in range(1, states.shape[1]):
+    for j in 1 + np.flatnonzero(near):
         a = colregs.assess_pair(t, pos0, psi0, states[:, j, :2], states[:, j, 2], r_safe=r_safe,
                                 collision_distance=collision_distance, profile=profile, active_a=mask[:, 0],
                                 active_b=mask[:, j])
