@@ -240,6 +240,16 @@ def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int 
     tuple
         Final scenario states ``(nx, M)`` and the wall time spent in compiled code (s).
     """
+    def call(x, p, active):
+        return np.array(_chunk_final(layout, chunk, len(active))(x, p))
+
+    return _stream(layout, X0, P, width, call)
+
+
+def _stream(layout: Layout, X0, P, width, call) -> tuple[np.ndarray, float]:
+    """Step the columns of ``X0`` / ``P`` at most ``width`` at a time with ``call(x, p, active) -> x_next``
+    (``active``: the original column indices of ``x``); a column that finished leaves the batch and a waiting one
+    takes its place. Returns the final states and the time spent in ``call``."""
     X0 = np.asarray(X0, float)
     P = np.asarray(P, float)
     M = X0.shape[1]
@@ -252,9 +262,8 @@ def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int 
     x, p = X0[:, active], P[:, active]
     busy = 0.0
     while active:
-        F = _chunk_final(layout, chunk, len(active))
         t0 = time.perf_counter()
-        x = np.array(F(x, p))
+        x = call(x, p, active)
         busy += time.perf_counter() - t0
         done = _finished(layout, x, p[t_row])
         if not done.any():
@@ -325,40 +334,18 @@ def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chu
     if isinstance(every, bool) or not isinstance(every, int) or every < 1 or chunk % every:
         raise ValueError(f"every: expected an integer >= 1 dividing chunk={chunk}, got {every!r}")
     X0 = np.asarray(X0, float)
-    P = np.asarray(P, float)
     M, N = X0.shape[1], layout.n_ships
-    width = M if width is None else max(1, min(int(width), M))
-    t_row = GLOBAL_PARAMS.index("t_max")
     rows = [0] + [1 + i * NS + S_[name] for i in range(N) for name in HISTORY_STATE]
     hist: list[list[np.ndarray]] = [[X0[rows, j][None, :]] for j in range(M)]
-    out = X0.copy()
-    active = [j for j in range(M) if not _finished(layout, X0[:, j:j + 1], P[t_row, j])[0]]
-    pending = active[width:]
-    active = active[:width]
-    x, p = X0[:, active], P[:, active]
-    busy = 0.0
-    while active:
-        F = _chunk_history(layout, chunk, len(active), every)
-        t0 = time.perf_counter()
-        xf, H = F(x, p)
-        busy += time.perf_counter() - t0
-        x = np.array(xf)
+
+    def call(x, p, active):
+        xf, H = _chunk_history(layout, chunk, len(active), every)(x, p)
         H = np.array(H).reshape(len(rows), chunk // every, len(active))
         for k, j in enumerate(active):
             hist[j].append(H[:, :, k].T)
-        done = _finished(layout, x, p[t_row])
-        if not done.any():
-            continue
-        out[:, [active[k] for k in np.flatnonzero(done)]] = x[:, done]
-        keep = np.flatnonzero(~done)
-        active = [active[k] for k in keep]
-        x, p = x[:, keep], p[:, keep]
-        n_new = min(len(pending), width - len(active))
-        if n_new:
-            new, pending = pending[:n_new], pending[n_new:]
-            active += new
-            x = np.hstack([x, X0[:, new]])
-            p = np.hstack([p, P[:, new]])
+        return np.array(xf)
+
+    out, busy = _stream(layout, X0, P, width, call)
     t, states = [], []
     for j in range(M):
         Hj = np.concatenate(hist[j], axis=0)  # (K_j, rows)
