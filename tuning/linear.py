@@ -63,7 +63,7 @@ def _check_side(side: str) -> str:
 class YawModel:
     """Linear yaw subsystem ``ẋ = A x + B δ_c``, ``y = C x`` with ``x = (v, r, psi, delta)`` and ``y = (r, psi)``.
 
-    Attributes
+    Parameters
     ----------
     speed : float
         Speed of the straight-running operating point, fraction of the design speed.
@@ -183,6 +183,23 @@ class Nomoto(_OwnSpeedUnits):
     ``K/(1 + T s)`` with ``T = T1 + T2 - T3``.
 
     For the first-order model only ``K`` and ``T`` are set (``T1 = T``, ``T2 = T3 = 0``).
+
+    Parameters
+    ----------
+    K : float
+        Static gain of ``r/δ`` (yaw rate in U_des/L per rad of rudder).
+    T : float
+        Equivalent first-order time constant ``T1 + T2 - T3`` (L/U_des).
+    T1 : float
+        Larger pole time constant (L/U_des).
+    T2 : float
+        Smaller pole time constant (L/U_des); 0 for the first-order model.
+    T3 : float
+        Zero time constant (L/U_des); 0 for the first-order model.
+    speed : float
+        Speed of the operating point, fraction of the design speed.
+    side : str
+        Linearised side of the γ_R switch (``"port"``, ``"starboard"`` or ``"mean"``).
     """
 
     K: float
@@ -194,7 +211,13 @@ class Nomoto(_OwnSpeedUnits):
     side: str
 
     def T_seconds(self, ship=None) -> float:
-        """Time constant in seconds at full scale."""
+        """Time constant in seconds at full scale.
+
+        Parameters
+        ----------
+        ship : Ship, optional
+            Ship whose ``time_scale_s`` (seconds per L/U_des) converts the time; the KCS by default.
+        """
         return self.T * (ship or load_kcs()).time_scale_s
 
     def to_dict(self) -> dict:
@@ -212,6 +235,11 @@ def nomoto_second_order(yaw_model: YawModel) -> Nomoto:
 
     ``T1 ≥ T2`` are minus the reciprocals of the poles, ``T3`` minus the reciprocal of the zero, ``K`` the static
     gain; the poles of this ship are real over the speed range.
+
+    Parameters
+    ----------
+    yaw_model : YawModel
+        Linear yaw subsystem (:func:`yaw_subsystem`); its (v, r) part with the rudder angle as input is used.
 
     Examples
     --------
@@ -232,6 +260,11 @@ def nomoto_second_order(yaw_model: YawModel) -> Nomoto:
 def nomoto_first_order(yaw_model: YawModel) -> Nomoto:
     """First-order Nomoto model ``r/δ = K/(1 + T s)`` with ``T = T1 + T2 - T3`` (design-speed units).
 
+    Parameters
+    ----------
+    yaw_model : YawModel
+        Linear yaw subsystem (:func:`yaw_subsystem`); reduced through :func:`nomoto_second_order`.
+
     Examples
     --------
     >>> n = nomoto_first_order(yaw_subsystem(1.0, "starboard"))
@@ -247,6 +280,27 @@ class NomotoFit(_OwnSpeedUnits):
     """First-order Nomoto model fitted to a nonlinear rudder step, with the linear model of the same side.
 
     ``t`` and ``r`` are the simulated yaw-rate history (design-speed units); ``rms`` the fit's RMS residual.
+
+    Parameters
+    ----------
+    K : float
+        Fitted gain of ``r/δ`` (yaw rate in U_des/L per rad of rudder).
+    T : float
+        Fitted time constant (L/U_des).
+    speed : float
+        Speed of the straight-running start, fraction of the design speed.
+    rudder_deg : float
+        Rudder step (degrees; positive is starboard).
+    side : str
+        Side the step's sign selects (``"port"`` or ``"starboard"``).
+    rms : float
+        RMS residual of the fit (U_des/L).
+    linear : Nomoto
+        First-order Nomoto model of the linearisation on the same side.
+    t : ndarray
+        Sample times of the simulated step (L/U_des).
+    r : ndarray
+        Simulated yaw rate at ``t`` (U_des/L).
     """
 
     K: float
@@ -288,6 +342,15 @@ def fit_nomoto_step(speed: float = 1.0, rudder_deg: float = 0.1, n_points: int =
     The linear and fitted models agree only for small rudder angles: at the design speed this ship's yaw response
     is strongly nonlinear (fitted K' ≈ 3.5 at 1°, 1.9 at 5° against the linear 4.09 to starboard; to port the
     nearly course-unstable linear branch holds only below about 0.02°). Hence the small default.
+
+    Parameters
+    ----------
+    speed : float
+        Fraction of the design speed, in [0.2, 1.2].
+    rudder_deg : float
+        Rudder step in degrees, nonzero with magnitude at most 35; its sign selects the side (positive starboard).
+    n_points : int
+        Number of sample times over the horizon used for the fit.
 
     Examples
     --------
