@@ -122,6 +122,11 @@ class PdSpec:
 def second_order_overshoot(zeta: float) -> float:
     """Percent overshoot of the standard second-order step, ``100 exp(-πζ/√(1-ζ²))`` (0 for ζ ≥ 1).
 
+    Parameters
+    ----------
+    zeta : float
+        Damping ratio.
+
     Examples
     --------
     >>> round(second_order_overshoot(0.8), 2), second_order_overshoot(1.0)
@@ -136,6 +141,15 @@ def _gain_row(kp, kd) -> np.ndarray:
 
 def closed_loop(model: YawModel, kp: float, kd: float) -> ct.StateSpace:
     """Linear closed loop ψ_d → (ψ, r, δ_c) of the yaw model with the PD (derivative on measured r).
+
+    Parameters
+    ----------
+    model : YawModel
+        Linear yaw subsystem (:func:`~tuning.linear.yaw_subsystem`).
+    kp : float
+        Proportional gain K_p (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
 
     Examples
     --------
@@ -156,7 +170,33 @@ def _loop_transfer(model: YawModel, kp: float, kd: float) -> ct.StateSpace:
 @dataclass(frozen=True)
 class StepResponse:
     """A heading step ``psi_d`` (rad): histories and the usual step metrics (overshoot in percent of the step,
-    2 % settling and 10–90 % rise times in L/U_des, peak commanded rudder in degrees)."""
+    2 % settling and 10–90 % rise times in L/U_des, peak commanded rudder in degrees).
+
+    Parameters
+    ----------
+    kind : str
+        Model that produced the step, ``"linear"`` or ``"nonlinear"``.
+    psi_d : float
+        Heading step (rad; positive to starboard).
+    t : ndarray
+        Sample times (L/U_des).
+    psi : ndarray
+        Heading at ``t`` (rad).
+    r : ndarray
+        Yaw rate at ``t`` (U_des/L).
+    delta_c : ndarray
+        Commanded rudder angle at ``t`` (rad).
+    delta : ndarray, optional
+        Actual rudder angle at ``t`` (rad); None for the linear step.
+    overshoot : float
+        Overshoot in percent of the step (NaN if not computed).
+    settling_time : float
+        2 % settling time (L/U_des).
+    rise_time : float
+        10–90 % rise time (L/U_des).
+    peak_rudder_deg : float
+        Largest commanded rudder magnitude (degrees).
+    """
 
     kind: str
     psi_d: float
@@ -189,7 +229,22 @@ def _horizon(model: YawModel, kp: float, kd: float) -> float:
 
 def linear_step(model: YawModel, kp: float, kd: float, step_deg: float = 10.0, t_end: float | None = None
                 ) -> StepResponse:
-    """Heading step of ``step_deg`` on the linear closed loop (steering gear included, no saturation)."""
+    """Heading step of ``step_deg`` on the linear closed loop (steering gear included, no saturation).
+
+    Parameters
+    ----------
+    model : YawModel
+        Linear yaw subsystem (:func:`~tuning.linear.yaw_subsystem`).
+    kp : float
+        Proportional gain K_p (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
+    step_deg : float
+        Heading step (degrees; signed, positive to starboard).
+    t_end : float, optional
+        Horizon (L/U_des); by default 12 times the slowest closed-loop time constant, clipped to [30, 400]
+        (100 if the loop is unstable).
+    """
     t_end = t_end or _horizon(model, kp, kd)
     t = np.arange(0.0, t_end + DT / 2, DT)
     psi_d = math.radians(step_deg)
@@ -206,6 +261,35 @@ class LoopAnalysis:
     Poles with their natural frequencies and damping ratios (``control.damp``); the dominant pole or pair (largest
     real part); gain margin (absolute, ``inf`` when the phase never reaches -180°) and phase margin (deg) of the
     loop broken at the rudder command, steering gear included; metrics of a linear heading step of ``step_deg``.
+
+    Parameters
+    ----------
+    kp : float
+        Proportional gain K_p (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
+    poles : tuple of complex
+        Closed-loop poles (U_des/L), largest real part first.
+    wn : tuple of float
+        Natural frequency of each pole (U_des/L).
+    zeta : tuple of float
+        Damping ratio of each pole.
+    dominant_wn : float
+        Natural frequency of the dominant pole or pair (U_des/L).
+    dominant_zeta : float
+        Damping ratio of the dominant pole or pair, capped at 1.
+    gain_margin : float
+        Gain margin (absolute factor; ``inf`` when the phase never reaches -180°).
+    phase_margin : float
+        Phase margin (degrees).
+    w_phase_crossover : float
+        Phase-crossover frequency (U_des/L); NaN when there is none.
+    w_gain_crossover : float
+        Gain-crossover frequency (U_des/L).
+    stable : bool
+        Whether every closed-loop pole has a negative real part.
+    step : StepResponse
+        Linear heading step of ``step_deg`` (empty histories when the loop is unstable).
     """
 
     kp: float
@@ -246,6 +330,17 @@ class LoopAnalysis:
 def analyse_loop(model: YawModel, kp: float, kd: float, step_deg: float = 10.0) -> LoopAnalysis:
     """Poles, damping, margins and linear step of the PD loop on ``model``.
 
+    Parameters
+    ----------
+    model : YawModel
+        Linear yaw subsystem (:func:`~tuning.linear.yaw_subsystem`).
+    kp : float
+        Proportional gain K_p (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
+    step_deg : float
+        Heading step (degrees) of the linear step response.
+
     Examples
     --------
     >>> a = analyse_loop(yaw_subsystem(1.0), 3.5, 4.0)
@@ -276,6 +371,15 @@ def _polys(model: YawModel):
 
 def place_pair(model: YawModel, zeta: float, wn: float) -> tuple[float, float]:
     """Gains ``(K_p, K_d)`` that put the pair ``s² + 2ζω_n s + ω_n²`` among the closed-loop poles of ``model``.
+
+    Parameters
+    ----------
+    model : YawModel
+        Linear yaw subsystem (:func:`~tuning.linear.yaw_subsystem`).
+    zeta : float
+        Damping ratio of the pair.
+    wn : float
+        Natural frequency of the pair (U_des/L).
 
     Examples
     --------
@@ -341,6 +445,17 @@ def wn_limits(model: YawModel, zeta: float, method: str = "placement", step_deg:
     (placement only): the remaining poles at least :data:`DOMINANCE` times faster than the designed pair;
     ``"both"``: both at once (None if none does).
 
+    Parameters
+    ----------
+    model : YawModel
+        Linear yaw subsystem (:func:`~tuning.linear.yaw_subsystem`).
+    zeta : float
+        Damping ratio of the designed pair.
+    method : {"placement", "nomoto"}
+        Design method (module docstring); ``"nomoto"`` has only the saturation limit.
+    step_deg : float
+        Heading step (degrees) that must not saturate the rudder.
+
     Examples
     --------
     >>> lim = wn_limits(yaw_subsystem(1.0), 0.8, "nomoto")
@@ -388,6 +503,43 @@ class PdDesign:
     where ω_n came from (``"spec"``, ``"settling_time"``, ``"saturation"``, ``"dominance"``, ``"gains"``).
     ``kp_nomoto``/``kd_nomoto`` are the first-order Nomoto gains for the same ζ, ω_n and ``nomoto_loop`` their
     analysis on the full model. ``predicted_overshoot`` is the second-order formula for ``zeta``.
+
+    Parameters
+    ----------
+    kp : float
+        Proportional gain K_p (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
+    method : str
+        ``"placement"``, ``"nomoto"`` or ``"given"`` (gains analysed, not designed).
+    zeta : float
+        Damping ratio (specified, or Nomoto-equivalent for ``"given"``).
+    wn : float
+        Natural frequency (U_des/L).
+    wn_source : str
+        Where ω_n came from: ``"spec"``, ``"settling_time"``, ``"saturation"``, ``"dominance"`` or ``"gains"``.
+    speed : float
+        Speed of the linear model, fraction of the design speed.
+    side : str
+        Linearised side of the γ_R switch (``"port"``, ``"starboard"`` or ``"mean"``).
+    nomoto_K : float
+        First-order Nomoto gain K of the model (design-speed units, U_des/L per rad).
+    nomoto_T : float
+        First-order Nomoto time constant T of the model (L/U_des).
+    kp_nomoto : float
+        First-order Nomoto design's K_p for the same ζ and ω_n.
+    kd_nomoto : float
+        First-order Nomoto design's K_d for the same ζ and ω_n.
+    predicted_overshoot : float
+        Second-order overshoot for ``zeta`` (percent).
+    loop : LoopAnalysis
+        Analysis of the loop with ``kp``, ``kd`` on the full linear model.
+    nomoto_loop : LoopAnalysis, optional
+        Analysis of the loop with ``kp_nomoto``, ``kd_nomoto``; None for ``method="given"``.
+    limits : dict
+        Largest ω_n under each default-ω_n limit (:func:`wn_limits`); empty for ``method="given"``.
+    model : YawModel, optional
+        The linear yaw model designed on.
     """
 
     kp: float
@@ -455,6 +607,8 @@ def design_pd(model_or_speed=1.0, spec: PdSpec | None = None, *, side: str = "po
         The linear model, or a speed (fraction of U_des) linearised on ``side``.
     spec : PdSpec
         Damping, natural frequency / settling time, method; defaults to ``PdSpec()``.
+    side : {"port", "starboard", "mean"}
+        Side of the linearisation when ``model_or_speed`` is a speed (ignored for a :class:`YawModel`).
 
     Examples
     --------
@@ -496,6 +650,19 @@ def analyse_gains(kp: float, kd: float, model_or_speed=1.0, *, side: str = "port
                   step_deg: float = 10.0) -> PdDesign:
     """Given gains as a :class:`PdDesign` (``method="given"``) with their Nomoto-equivalent ζ and ω_n.
 
+    Parameters
+    ----------
+    kp : float
+        Proportional gain K_p, > 0 (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d, ≥ 0, on the measured yaw rate (rad of rudder per U_des/L).
+    model_or_speed : YawModel or float
+        The linear model, or a speed (fraction of U_des) linearised on ``side``.
+    side : {"port", "starboard", "mean"}
+        Side of the linearisation when ``model_or_speed`` is a speed.
+    step_deg : float
+        Heading step (degrees) of the linear step response.
+
     Examples
     --------
     >>> p = analyse_gains(3.5, 4.0, 1.0)
@@ -519,6 +686,21 @@ class GainMap:
 
     ``overshoot`` (percent), ``settling_time`` and ``dominant_zeta`` are ``(len(kd_grid), len(kp_grid))``
     arrays, NaN where the loop is unstable or does not settle within the horizon.
+
+    Parameters
+    ----------
+    paper : PdDesign
+        The paper's gains K_p = 3.5, K_d = 4 analysed (:func:`analyse_gains`).
+    kp_grid : ndarray
+        Grid of K_p values.
+    kd_grid : ndarray
+        Grid of K_d values.
+    overshoot : ndarray
+        Linear step overshoot (percent).
+    settling_time : ndarray
+        2 % settling time of the linear step (L/U_des).
+    dominant_zeta : ndarray
+        Damping ratio of the dominant closed-loop pole or pair, capped at 1.
     """
 
     paper: PdDesign
@@ -565,6 +747,19 @@ def grid_step_metrics(model: YawModel, kp_grid, kd_grid, t_end: float = 150.0, d
     """Overshoot (%), 2 % settling time and dominant damping of the linear unit heading step over a gain grid.
 
     All loops are stepped together with their exact zero-order-hold discretisation (batched ``expm``).
+
+    Parameters
+    ----------
+    model : YawModel
+        Linear yaw subsystem (:func:`~tuning.linear.yaw_subsystem`).
+    kp_grid : array_like
+        K_p values (columns of the result).
+    kd_grid : array_like
+        K_d values (rows of the result).
+    t_end : float
+        Horizon of the step (L/U_des).
+    dt : float
+        Discretisation step (L/U_des).
     """
     KP, KD = np.meshgrid(np.asarray(kp_grid, float), np.asarray(kd_grid, float))
     kp, kd = KP.ravel(), KD.ravel()
@@ -601,6 +796,17 @@ def grid_step_metrics(model: YawModel, kp_grid, kd_grid, t_end: float = 150.0, d
 def paper_gains_map(speed: float = 1.0, *, side: str = "port", kp_grid=None, kd_grid=None) -> GainMap:
     """Where the paper's K_p = 3.5, K_d = 4 sit on the linear model at ``speed``, and a (K_p, K_d) grid map.
 
+    Parameters
+    ----------
+    speed : float
+        Fraction of the design speed, in [0.2, 1.2].
+    side : {"port", "starboard", "mean"}
+        Side of the linearisation.
+    kp_grid : array_like, optional
+        K_p values of the map; 40 points over [0.1, 6] by default.
+    kd_grid : array_like, optional
+        K_d values of the map; 41 points over [0, 8] by default.
+
     Examples
     --------
     >>> g = paper_gains_map(1.0, kp_grid=[1.0, 3.5], kd_grid=[2.0, 4.0])
@@ -636,6 +842,19 @@ def nonlinear_step(kp: float, kd: float, speed: float = 1.0, step_deg: float = 1
 
     Straight running at ``speed`` (self-propulsion rpm) is the initial state; the rollout is a ``mapaccum`` of
     the compiled closed-loop step.
+
+    Parameters
+    ----------
+    kp : float
+        Proportional gain K_p (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
+    speed : float
+        Fraction of the design speed of the initial straight running.
+    step_deg : float
+        Heading step (degrees; signed, positive to starboard).
+    t_end : float
+        Horizon (L/U_des), integrated in steps of :data:`DT`.
     """
     n = int(round(t_end / DT))
     F = _heading_loop_step().mapaccum(n)
@@ -660,6 +879,23 @@ class NonlinearCheck:
     step, otherwise starboard), ``opposite`` the same step the other way, ``linear`` the linear prediction of
     ``step``; ``square`` holds CE, MCTE, status and time to goal of the waypoint-square study (design speed,
     ILOS defaults) with these gains, or is None.
+
+    Parameters
+    ----------
+    kp : float
+        Proportional gain K_p (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
+    speed : float
+        Speed of the check, fraction of the design speed.
+    step : StepResponse
+        Nonlinear heading step towards the side of the linear model.
+    opposite : StepResponse
+        Nonlinear heading step of the same size the other way.
+    linear : StepResponse
+        Linear prediction of ``step``.
+    square : dict, optional
+        CE, MCTE, status and time to goal of the waypoint-square study, or None.
     """
 
     kp: float
@@ -680,7 +916,15 @@ class NonlinearCheck:
 
 
 def waypoint_square(kp: float, kd: float) -> dict:
-    """CE, MCTE, status and time to goal of the paper's waypoint-square study with PD gains ``kp``, ``kd``."""
+    """CE, MCTE, status and time to goal of the paper's waypoint-square study with PD gains ``kp``, ``kd``.
+
+    Parameters
+    ----------
+    kp : float
+        Proportional gain K_p (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
+    """
     from mmg_casadi.encounters import waypoint_square as square_scenario
     from mmg_casadi.scenario_run import run_scenario
     own = run_scenario(square_scenario(), params={"kp": float(kp), "kd": float(kd)}).metrics["ships"][0]
@@ -690,6 +934,17 @@ def waypoint_square(kp: float, kd: float) -> dict:
 def verify_nonlinear(design: PdDesign, speed: float | None = None, step_deg: float = 10.0, *,
                      square: bool = True) -> NonlinearCheck:
     """Check ``design`` on the nonlinear model: a heading step both ways and (optionally) the waypoint square.
+
+    Parameters
+    ----------
+    design : PdDesign
+        The design (or analysed gains) to check.
+    speed : float, optional
+        Fraction of the design speed, in [0.2, 1.2]; the design's speed by default.
+    step_deg : float
+        Size of the heading step (degrees, in (0, 180]); taken towards the side of the design's model.
+    square : bool
+        Whether to run the waypoint-square study as well.
 
     Examples
     --------
@@ -720,7 +975,17 @@ def _save(fig: Figure, path) -> Figure:
 
 
 def plot_root_locus(design: PdDesign, path=None, *, paper: PdDesign | None = None) -> Figure:
-    """Root locus of the loop with the gain pair scaled by k ∈ [0.01, 100] (design at k = 1), on a Figure."""
+    """Root locus of the loop with the gain pair scaled by k ∈ [0.01, 100] (design at k = 1), on a Figure.
+
+    Parameters
+    ----------
+    design : PdDesign
+        The design whose gains are scaled.
+    path : str or path-like, optional
+        Where to save the figure (PNG, 110 dpi); not saved if None.
+    paper : PdDesign, optional
+        A second gain pair (the paper's) whose locus is drawn as well.
+    """
     model = design.model or yaw_subsystem(design.speed, design.side)
     fig = Figure(figsize=(7, 6))
     ax = fig.add_subplot(1, 1, 1)
@@ -756,7 +1021,17 @@ def plot_root_locus(design: PdDesign, path=None, *, paper: PdDesign | None = Non
 
 
 def plot_step(design: PdDesign, nonlinear: NonlinearCheck, path=None) -> Figure:
-    """Linear vs nonlinear heading step: heading and rudder against time."""
+    """Linear vs nonlinear heading step: heading and rudder against time.
+
+    Parameters
+    ----------
+    design : PdDesign
+        The design (its gains label the plot).
+    nonlinear : NonlinearCheck
+        Nonlinear check of the design (:func:`verify_nonlinear`) with the steps to draw.
+    path : str or path-like, optional
+        Where to save the figure (PNG, 110 dpi); not saved if None.
+    """
     fig = Figure(figsize=(8, 6))
     ax1, ax2 = fig.add_subplot(2, 1, 1), fig.add_subplot(2, 1, 2)
     lin, nl, opp = nonlinear.linear, nonlinear.step, nonlinear.opposite
@@ -784,7 +1059,17 @@ def plot_step(design: PdDesign, nonlinear: NonlinearCheck, path=None) -> Figure:
 
 
 def plot_gain_map(gain_map: GainMap, path=None, *, design: PdDesign | None = None) -> Figure:
-    """Overshoot contours over (K_p, K_d) with settling-time lines, the paper's gains and the design marked."""
+    """Overshoot contours over (K_p, K_d) with settling-time lines, the paper's gains and the design marked.
+
+    Parameters
+    ----------
+    gain_map : GainMap
+        The grid map (:func:`paper_gains_map`).
+    path : str or path-like, optional
+        Where to save the figure (PNG, 110 dpi); not saved if None.
+    design : PdDesign, optional
+        A design to mark (with its first-order Nomoto gains for a placement design).
+    """
     fig = Figure(figsize=(8, 6))
     ax = fig.add_subplot(1, 1, 1)
     KP, KD = np.meshgrid(gain_map.kp_grid, gain_map.kd_grid)
