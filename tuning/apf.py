@@ -99,7 +99,7 @@ MEASURED = {
 class TuningConfig:
     """Settings of the smoothed training problem.
 
-    Attributes
+    Parameters
     ----------
     smooth : float
         Sigmoid sharpness ``s`` of the smooth closed loop (1/L for distances, 1/rad for angles). 10 keeps the
@@ -174,14 +174,36 @@ def paper_encounters() -> dict:
 
 
 def sampled_scenario(env: int, run: int, base_seed: int):
-    """Monte Carlo scenario ``run`` of environment ``env`` (modified sink-vortex for every ship)."""
+    """Monte Carlo scenario ``run`` of environment ``env`` (modified sink-vortex for every ship).
+
+    Parameters
+    ----------
+    env : int
+        Monte Carlo environment (1-5, :func:`mmg_casadi.sampling.sample_scenario`).
+    run : int
+        Run index within the environment.
+    base_seed : int
+        Base seed of the draw (e.g. :data:`TRAIN_SEED` or :data:`HOLDOUT_SEED`).
+    """
     return scenario_from_dict(sample_scenario(env, run, base_seed).to_scenario_dict(METHOD),
                               source=f"env{env}-run{run}-seed{base_seed}")
 
 
 def training_scenarios(n_sampled: int, *, paper: bool = True, envs=(1, 2), base_seed: int = TRAIN_SEED) -> dict:
     """Training set: the paper's encounters (``paper``) plus ``n_sampled`` Monte Carlo scenarios drawn
-    alternately from ``envs`` with ``base_seed``."""
+    alternately from ``envs`` with ``base_seed``.
+
+    Parameters
+    ----------
+    n_sampled : int
+        Number of sampled Monte Carlo scenarios, >= 0.
+    paper : bool
+        Whether to include the paper's encounters.
+    envs : sequence of int
+        Environments the sampled scenarios are drawn from, in turn.
+    base_seed : int
+        Base seed of the sampled scenarios.
+    """
     if isinstance(n_sampled, bool) or not isinstance(n_sampled, int) or n_sampled < 0:
         raise InputError("train", "an integer >= 0", n_sampled)
     out = dict(paper_encounters()) if paper else {}
@@ -198,7 +220,31 @@ def training_scenarios(n_sampled: int, *, paper: bool = True, envs=(1, 2), base_
 
 @dataclass
 class TrainingCase:
-    """One training scenario prepared for the smooth rollout."""
+    """One training scenario prepared for the smooth rollout.
+
+    Parameters
+    ----------
+    name : str
+        Scenario name.
+    layout : Layout
+        Smooth closed-loop layout (``smooth`` set from the configuration).
+    x0 : ndarray
+        Initial state of the closed loop.
+    p : ndarray
+        Numeric step parameters (``dt`` replaced, ``t_max`` beyond the horizon; θ entries are overwritten by E θ).
+    steps : int
+        Number of training steps.
+    horizon : float
+        Training horizon ``steps · dt`` (L/U).
+    delta_max : float
+        Rudder limit (rad), normalising CE.
+    collision_distance : float
+        Collision distance of the scenario (L).
+    exact_t_end : float
+        Finishing time of the exact loop at the paper's values (L/U).
+    exact_d_min : float
+        Closest approach of the exact loop at the paper's values (L).
+    """
 
     name: str
     layout: Layout          # smooth layout
@@ -224,7 +270,17 @@ def _theta_params(p_num: np.ndarray, theta):
 
 
 def prepare_case(name: str, sc, config: TuningConfig = TuningConfig()) -> TrainingCase:
-    """Exact rollout at the paper's values (for the horizon), then the smooth layout and numeric parameters."""
+    """Exact rollout at the paper's values (for the horizon), then the smooth layout and numeric parameters.
+
+    Parameters
+    ----------
+    name : str
+        Name given to the case.
+    sc : Scenario
+        The scenario (modified sink-vortex guidance).
+    config : TuningConfig
+        Settings of the smoothed training problem.
+    """
     from mmg_casadi.simulation import simulate
     pr = build_problem(sc, dict(zip(THETA, PAPER)))
     layout, x0, p = pr.layout, pr.x0, pr.p
@@ -243,7 +299,19 @@ def prepare_case(name: str, sc, config: TuningConfig = TuningConfig()) -> Traini
 
 def case_terms(case: TrainingCase, theta, config: TuningConfig = TuningConfig(), step: ca.Function | None = None):
     """Symbolic terms of one training case for ``theta`` (MX 3×1): ``(objective, softmin distance, ce, mcte)``
-    where ``ce`` and ``mcte`` are per-ship rows (smoothed CE and MCTE over the horizon)."""
+    where ``ce`` and ``mcte`` are per-ship rows (smoothed CE and MCTE over the horizon).
+
+    Parameters
+    ----------
+    case : TrainingCase
+        The prepared training case.
+    theta : MX
+        θ = (k_vor0, lam_sink, r_safe), 3×1 (symbolic or numeric).
+    config : TuningConfig
+        Settings of the smoothed training problem.
+    step : casadi.Function, optional
+        Closed-loop step of ``case.layout``; built if None.
+    """
     step = step or build_closed_loop_step(case.layout)
     n = case.steps
     p = _theta_params(case.p, theta)
@@ -292,6 +360,13 @@ class SmoothProblem:
 
     ``objective(θ)`` and ``constraints(θ)`` evaluate numerically; ``function`` is the CasADi Function
     ``θ -> (J, g)`` (J without the proximal term), ``gradient(θ)`` its exact gradient.
+
+    Parameters
+    ----------
+    cases : list of TrainingCase
+        Training cases (at least one).
+    config : TuningConfig
+        Settings of the smoothed training problem.
     """
 
     def __init__(self, cases: list[TrainingCase], config: TuningConfig = TuningConfig()):
@@ -328,7 +403,13 @@ class SmoothProblem:
         return np.array(self.grad_function(np.asarray(theta, float))).ravel()
 
     def per_case(self, theta) -> list[dict]:
-        """Smoothed CE / MCTE per ship and the soft-min distance of every case at ``theta``."""
+        """Smoothed CE / MCTE per ship and the soft-min distance of every case at ``theta``.
+
+        Parameters
+        ----------
+        theta : array_like
+            θ = (k_vor0, lam_sink, r_safe).
+        """
         ce, mc = (np.array(v).ravel() for v in self.terms_function(np.asarray(theta, float)))
         g = self.constraints(theta)
         out, k = [], 0
@@ -343,7 +424,17 @@ class SmoothProblem:
 def gradient_check(problem: SmoothProblem, theta=PAPER, rel_step: float = 1e-6) -> dict:
     """Exact (AD) gradient of the smoothed objective against central finite differences with steps
     ``rel_step · |θ_k|``. Returns both gradients and the relative error per component and overall
-    (‖g_AD − g_FD‖ / ‖g_AD‖)."""
+    (‖g_AD − g_FD‖ / ‖g_AD‖).
+
+    Parameters
+    ----------
+    problem : SmoothProblem
+        The smoothed training problem.
+    theta : array_like
+        θ = (k_vor0, lam_sink, r_safe) at which to compare; the paper's values by default.
+    rel_step : float
+        Relative finite-difference step (of ``max(|θ_k|, 1)``).
+    """
     theta = np.asarray(theta, float)
     t0 = time.perf_counter()
     g = problem.gradient(theta)
@@ -370,6 +461,41 @@ class TuningResult:
     the smoothed training objective (without the proximal term); ``constraints_*``: soft-min distance per
     training scenario with its lower bound ``constraint_bounds``; ``iterations``: IPOPT's iterates
     (``iter``, ``objective``, ``theta``, ``min_slack``); ``gradient_check``: see :func:`gradient_check`.
+
+    Parameters
+    ----------
+    params_before : dict
+        Initial θ as ``{name: value}``.
+    params_after : dict
+        Tuned θ as ``{name: value}``.
+    objective_before : float
+        Smoothed training objective at the initial θ (without the proximal term).
+    objective_after : float
+        Smoothed training objective at the tuned θ.
+    constraints_before : list of float
+        Soft-min distance per training scenario at the initial θ (L).
+    constraints_after : list of float
+        Soft-min distance per training scenario at the tuned θ (L).
+    constraint_bounds : list of float
+        Lower bound of each soft-min distance (L).
+    gradient_check : dict
+        Result of :func:`gradient_check` (empty if not run).
+    iterations : list of dict
+        IPOPT's iterates.
+    status : str
+        IPOPT's return status (with a note if the initial values were kept).
+    scenarios : list of str
+        Names of the training scenarios.
+    horizons : list of float
+        Training horizon of each scenario (L/U).
+    config : dict
+        The :class:`TuningConfig` as a dict.
+    timings : dict
+        Wall-clock times of the stages (s).
+    per_case_before : list of dict
+        :meth:`SmoothProblem.per_case` at the initial θ.
+    per_case_after : list of dict
+        :meth:`SmoothProblem.per_case` at the tuned θ.
     """
 
     params_before: dict
@@ -455,6 +581,17 @@ def _stderr(msg: str) -> None:
 
 
 def prepare_cases(scenarios: dict, config: TuningConfig = TuningConfig(), report=None) -> list[TrainingCase]:
+    """:func:`prepare_case` for every scenario, optionally reporting each case's size and horizon.
+
+    Parameters
+    ----------
+    scenarios : dict
+        Scenario name -> Scenario.
+    config : TuningConfig
+        Settings of the smoothed training problem.
+    report : callable, optional
+        Takes one progress line per case; None for silence.
+    """
     out = []
     for name, sc in scenarios.items():
         c = prepare_case(name, sc, config)
@@ -469,7 +606,21 @@ def prepare_cases(scenarios: dict, config: TuningConfig = TuningConfig(), report
 def tune(scenarios, config: TuningConfig = TuningConfig(), *, theta0=PAPER, report=_stderr,
          check_gradient: bool = True) -> TuningResult:
     """Tune θ = (k_vor0, lam_sink, r_safe) on ``scenarios`` (a dict name -> Scenario, or prepared
-    :class:`TrainingCase` list) with IPOPT; ``report`` (a callable taking a line, or None) gets the progress."""
+    :class:`TrainingCase` list) with IPOPT; ``report`` (a callable taking a line, or None) gets the progress.
+
+    Parameters
+    ----------
+    scenarios : dict or list of TrainingCase
+        Scenario name -> Scenario, or cases already prepared.
+    config : TuningConfig
+        Settings of the smoothed training problem.
+    theta0 : array_like
+        Initial θ = (k_vor0, lam_sink, r_safe); the paper's values by default.
+    report : callable, optional
+        Takes one progress line; None for silence.
+    check_gradient : bool
+        Whether to compare the AD gradient with finite differences at ``theta0`` first.
+    """
     timings = {}
     t0 = time.perf_counter()
     if isinstance(scenarios, dict):
@@ -548,7 +699,15 @@ def tune(scenarios, config: TuningConfig = TuningConfig(), *, theta0=PAPER, repo
 
 
 def write_params_toml(result: TuningResult | dict, path) -> None:
-    """Write the tuned values as ``[params]`` (read by ``mmg-casadi simulate/study --params``)."""
+    """Write the tuned values as ``[params]`` (read by ``mmg-casadi simulate/study --params``).
+
+    Parameters
+    ----------
+    result : TuningResult or dict
+        The tuning result (its ``params_after``), or θ as ``{name: value}``.
+    path : str or path-like
+        TOML file to write (parent directories are created).
+    """
     from pathlib import Path
     params = result.params_after if isinstance(result, TuningResult) else dict(result)
     lines = ["# modified sink-vortex parameters tuned by `mmg-casadi tune apf` (tuning/apf.py)", "[params]"]
@@ -567,7 +726,21 @@ def evaluate(param_sets: dict, *, envs=(1, 2, 3, 4, 5), runs: int = 40, base_see
     """Exact closed loop on the held-out scenarios: for every environment, ``runs`` scenarios drawn with
     ``base_seed`` and every parameter set of ``param_sets`` (name -> {k_vor0, lam_sink, r_safe}) in one batch
     (:func:`mmg_casadi.simulation.simulate_batch`). Returns ``{env: {name: summary}}`` with success rate and
-    its Wilson 95 % interval, failures by kind, and mean CE / MCTE of the own ship over its successful runs."""
+    its Wilson 95 % interval, failures by kind, and mean CE / MCTE of the own ship over its successful runs.
+
+    Parameters
+    ----------
+    param_sets : dict
+        Name -> ``{k_vor0, lam_sink, r_safe}``.
+    envs : sequence of int
+        Monte Carlo environments to evaluate.
+    runs : int
+        Scenarios per environment, >= 1.
+    base_seed : int
+        Base seed of the held-out scenarios.
+    report : callable, optional
+        Takes one progress line; None for silence.
+    """
     from mmg_casadi.montecarlo import classify
     from mmg_casadi.results import wilson_interval
     from mmg_casadi.simulation import simulate_batch
@@ -617,7 +790,17 @@ def evaluate(param_sets: dict, *, envs=(1, 2, 3, 4, 5), runs: int = 40, base_see
 def exact_training(scenarios: dict, params: dict, w_mcte: float = TuningConfig.w_mcte) -> dict:
     """The training scenarios in the exact (switching) closed loop over their whole voyages, with ``params``:
     per scenario Σ_ships (CE + w MCTE), the closest approach and whether anything collided; ``total`` sums
-    the objective terms."""
+    the objective terms.
+
+    Parameters
+    ----------
+    scenarios : dict
+        Scenario name -> Scenario.
+    params : dict
+        Guidance parameters (θ as ``{name: value}``) for every scenario.
+    w_mcte : float
+        Weight of MCTE against CE in the objective.
+    """
     from mmg_casadi.scenario_run import run_scenario
     out, total = {}, 0.0
     for name, sc in scenarios.items():
