@@ -151,7 +151,7 @@ def mmg_rhs(ship: ShipParams, steering: SteeringParams, x, delta_c, n_rpm, env=N
     env : casadi.SX or casadi.MX or sequence, optional
         Disturbance ``[V_c, beta_c, U_w, psi_w]`` (speeds in U_des, directions rad); ``None`` for calm water.
     windage : Windage, optional
-        Wind-load description; the default :class:`~mmg_casadi.environment.Windage` if ``None`` .
+        Wind-load description; the default :class:`~mmg_casadi.environment.Windage` if ``None``.
     """
     u, v, r, psi, delta = x[0], x[1], x[2], x[5], x[6]
     XH, YH, NH = hull_forces(ship, u, v, r)
