@@ -6,7 +6,15 @@ import casadi as ca
 
 
 def saturate(x, limit):
-    """Clip ``x`` to ``[-limit, limit]`` (CasADi expression)."""
+    """Clip ``x`` to ``[-limit, limit]`` (CasADi expression).
+
+    Parameters
+    ----------
+    x : float or casadi.SX or casadi.MX
+        Value to clip.
+    limit : float or casadi.SX or casadi.MX
+        Non-negative bound of the symmetric interval.
+    """
     return ca.fmin(ca.fmax(x, -limit), limit)
 
 
@@ -15,6 +23,19 @@ def steering_rate(delta, delta_c, T_delta, rate_max, delta_max):
 
     The command is first saturated at ±``delta_max``; the rudder then follows a first-order lag with time constant
     ``T_delta`` whose rate is clipped to ±``rate_max`` (all angles in rad, time non-dimensional).
+
+    Parameters
+    ----------
+    delta : float or casadi.SX or casadi.MX
+        Actual rudder angle δ (rad).
+    delta_c : float or casadi.SX or casadi.MX
+        Commanded rudder angle δ_c (rad), saturated at ±``delta_max``.
+    T_delta : float
+        Time constant of the first-order steering lag (L/U).
+    rate_max : float
+        Maximum rudder rate (rad per unit time L/U).
+    delta_max : float
+        Rudder-angle saturation (rad).
 
     Examples
     --------

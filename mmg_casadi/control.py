@@ -21,6 +21,15 @@ class PdHeadingParams:
 
     ``kp``: proportional gain K_p^c (rad of rudder per rad of heading error, > 0); ``kd``: derivative gain K_d^c
     (rad of rudder per unit non-dimensional yaw rate, ≥ 0); ``delta_max_deg``: command saturation (deg, (0, 45]).
+
+    Parameters
+    ----------
+    kp : float
+        Proportional gain K_p^c (rad of rudder per rad of heading error, > 0).
+    kd : float
+        Derivative gain K_d^c (rad of rudder per unit non-dimensional yaw rate, ≥ 0).
+    delta_max_deg : float
+        Rudder-command saturation (deg, in (0, 45]).
     """
 
     kp: float = param_field("kp")
@@ -39,6 +48,13 @@ class PdHeadingParams:
 def heading_error(psi, psi_d):
     """Heading error e = ψ − ψ_d wrapped to (-π, π] (rad).
 
+    Parameters
+    ----------
+    psi : float or casadi.SX or casadi.MX
+        Actual heading ψ (rad).
+    psi_d : float or casadi.SX or casadi.MX
+        Desired heading ψ_d (rad).
+
     Examples
     --------
     >>> import math
@@ -50,6 +66,21 @@ def heading_error(psi, psi_d):
 
 def pd_heading(psi, psi_d, r, kp, kd, delta_max):
     """Commanded rudder δ_c = sat(−K_p e − K_d r, ±δ_max) (rad); the yaw rate r stands for ė (ψ̇_d ≈ 0).
+
+    Parameters
+    ----------
+    psi : float or casadi.SX or casadi.MX
+        Actual heading ψ (rad).
+    psi_d : float or casadi.SX or casadi.MX
+        Desired heading ψ_d (rad).
+    r : float or casadi.SX or casadi.MX
+        Non-dimensional yaw rate (rad per unit time L/U).
+    kp : float
+        Proportional gain K_p^c (> 0).
+    kd : float
+        Derivative gain K_d^c (≥ 0).
+    delta_max : float
+        Rudder-command saturation (rad).
 
     Examples
     --------

@@ -88,6 +88,17 @@ class Environment:
     ``current_direction`` (rad), true wind ``wind_speed`` (fraction of U_des, [0, 5]) coming from
     ``wind_direction`` (rad). The defaults are calm water.
 
+    Parameters
+    ----------
+    current_speed : float, optional
+        Current speed (fraction of U_des, [0, 1]).
+    current_direction : float, optional
+        Direction the current flows towards (rad).
+    wind_speed : float, optional
+        True wind speed (fraction of U_des, [0, 5]).
+    wind_direction : float, optional
+        Direction the true wind comes from (rad).
+
     Examples
     --------
     >>> Environment().vector().tolist()
@@ -111,7 +122,21 @@ class Environment:
     @classmethod
     def from_si(cls, current_speed: float = 0.0, current_direction: float = 0.0, wind_speed: float = 0.0,
                 wind_direction: float = 0.0, U_design: float = 12.347) -> "Environment":
-        """Environment from speeds in m/s (directions in rad), scaled by the design speed ``U_design`` (m/s)."""
+        """Environment from speeds in m/s (directions in rad), scaled by the design speed ``U_design`` (m/s).
+
+        Parameters
+        ----------
+        current_speed : float, optional
+            Current speed (m/s).
+        current_direction : float, optional
+            Direction the current flows towards (rad).
+        wind_speed : float, optional
+            True wind speed (m/s).
+        wind_direction : float, optional
+            Direction the true wind comes from (rad).
+        U_design : float, optional
+            Design speed used for the scaling (m/s).
+        """
         return cls(current_speed / U_design, current_direction, wind_speed / U_design, wind_direction)
 
     @property
@@ -128,7 +153,19 @@ class Environment:
 class BlendermannParams:
     """Blendermann (1994) wind-load parameters of a ship type: lateral drag coefficient ``CDt`` (on A_L),
     longitudinal drag coefficients ``CDl_AF_bow`` / ``CDl_AF_stern`` (on A_F, head / tail wind), cross-force
-    parameter ``delta`` (all dimensionless)."""
+    parameter ``delta`` (all dimensionless).
+
+    Parameters
+    ----------
+    CDt : float
+        Lateral drag coefficient on A_L (> 0).
+    CDl_AF_bow : float
+        Longitudinal drag coefficient on A_F for head wind (> 0).
+    CDl_AF_stern : float
+        Longitudinal drag coefficient on A_F for tail wind (> 0).
+    delta : float
+        Cross-force parameter δ (dimensionless, [0, 1]).
+    """
 
     CDt: float
     CDl_AF_bow: float
@@ -166,6 +203,21 @@ class Windage:
     midships): the lateral centroid lies slightly aft of midships.
     :meth:`bare_hull` is the freeboard-only windage of the source's laboratory model.
 
+    Parameters
+    ----------
+    A_F : float, optional
+        Frontal projected area (m²).
+    A_L : float, optional
+        Lateral projected area (m²).
+    s_L : float, optional
+        Longitudinal position of the centroid of A_L from midships, positive forward (m).
+    L_oa : float, optional
+        Length over all (m).
+    coefficients : BlendermannParams, optional
+        Blendermann wind-load parameters of the ship type.
+    rho_air : float, optional
+        Air density (kg/m³).
+
     Examples
     --------
     >>> w = Windage()
@@ -193,12 +245,31 @@ class Windage:
     @classmethod
     def bare_hull(cls, L: float = 230.0, B: float = 32.2, freeboard: float = 8.2) -> "Windage":
         """Freeboard-only windage (no deck cargo, no deckhouse): A_F = B x freeboard, A_L = L x freeboard,
-        centroid at midships."""
+        centroid at midships.
+
+        Parameters
+        ----------
+        L : float, optional
+            Length, used for A_L and L_oa (m).
+        B : float, optional
+            Breadth (m).
+        freeboard : float, optional
+            Freeboard height above the waterline (m).
+        """
         return cls(A_F=B * freeboard, A_L=L * freeboard, s_L=0.0, L_oa=L)
 
 
 def current_body(V_c, beta_c, psi):
     """Body-frame components ``(u_c, v_c)`` of a current of speed ``V_c`` flowing towards ``beta_c``.
+
+    Parameters
+    ----------
+    V_c : float or casadi.SX or casadi.MX
+        Current speed (U_des units).
+    beta_c : float or casadi.SX or casadi.MX
+        Direction the current flows towards (rad).
+    psi : float or casadi.SX or casadi.MX
+        Heading ψ (rad).
 
     Examples
     --------
@@ -211,6 +282,19 @@ def current_body(V_c, beta_c, psi):
 def ground_velocity(u_r, v_r, psi, V_c, beta_c):
     """Ground (over-the-ground) body velocities ``(u_g, v_g) = (u_r + u_c, v_r + v_c)`` from the velocities
     through the water of the state.
+
+    Parameters
+    ----------
+    u_r : float or casadi.SX or casadi.MX
+        Surge velocity through the water (U_des units).
+    v_r : float or casadi.SX or casadi.MX
+        Sway velocity through the water (U_des units).
+    psi : float or casadi.SX or casadi.MX
+        Heading ψ (rad).
+    V_c : float or casadi.SX or casadi.MX
+        Current speed (U_des units).
+    beta_c : float or casadi.SX or casadi.MX
+        Direction the current flows towards (rad).
 
     Examples
     --------
@@ -225,6 +309,19 @@ def velocity_over_ground(u_r, v_r, psi, V_c, beta_c):
     """Earth-fixed velocity over the ground ``(x_dot, y_dot) = R(psi) (u_r, v_r) + V_c (cos beta_c, sin beta_c)``,
     the velocity that obstacle-avoidance guidance (fields, velocity obstacle) must use.
 
+    Parameters
+    ----------
+    u_r : float or casadi.SX or casadi.MX
+        Surge velocity through the water (U_des units).
+    v_r : float or casadi.SX or casadi.MX
+        Sway velocity through the water (U_des units).
+    psi : float or casadi.SX or casadi.MX
+        Heading ψ (rad).
+    V_c : float or casadi.SX or casadi.MX
+        Current speed (U_des units).
+    beta_c : float or casadi.SX or casadi.MX
+        Direction the current flows towards (rad).
+
     Examples
     --------
     >>> [round(float(c), 12) for c in velocity_over_ground(1.0, 0.0, math.pi / 2, 0.1, math.pi / 2)]
@@ -237,6 +334,13 @@ def velocity_over_ground(u_r, v_r, psi, V_c, beta_c):
 def current_kinematics(V_c, beta_c):
     """Earth-fixed drift ``(x_dot, y_dot)`` added by the current to the position kinematics.
 
+    Parameters
+    ----------
+    V_c : float or casadi.SX or casadi.MX
+        Current speed (U_des units).
+    beta_c : float or casadi.SX or casadi.MX
+        Direction the current flows towards (rad).
+
     Examples
     --------
     >>> [round(float(c), 12) for c in current_kinematics(0.1, 0.0)]
@@ -248,6 +352,19 @@ def current_kinematics(V_c, beta_c):
 def apparent_wind(u_g, v_g, psi, U_w, psi_w):
     """Apparent (relative) wind ``(u_rw, v_rw)`` in body axes: ship ground velocity minus wind velocity, for a
     true wind of speed ``U_w`` coming FROM ``psi_w``.
+
+    Parameters
+    ----------
+    u_g : float or casadi.SX or casadi.MX
+        Surge velocity over the ground (U_des units).
+    v_g : float or casadi.SX or casadi.MX
+        Sway velocity over the ground (U_des units).
+    psi : float or casadi.SX or casadi.MX
+        Heading ψ (rad).
+    U_w : float or casadi.SX or casadi.MX
+        True wind speed (U_des units).
+    psi_w : float or casadi.SX or casadi.MX
+        Direction the true wind comes from (rad).
 
     Examples
     --------
@@ -265,6 +382,19 @@ def blendermann_coefficients(gamma, params: BlendermannParams = CONTAINER_SHIP_L
 
     ``C_X`` is on the frontal area A_F, ``C_Y`` on the lateral area A_L and ``C_N`` on A_L L_oa (moment about
     midships); see the module docstring for the formulae.
+
+    Parameters
+    ----------
+    gamma : float or casadi.SX or casadi.MX
+        Relative wind angle γ (rad, 0 for head wind).
+    params : BlendermannParams, optional
+        Wind-load parameters of the ship type.
+    A_F : float
+        Frontal projected area (m²).
+    A_L : float
+        Lateral projected area (m²).
+    s_L_over_Loa : float
+        Centroid position of A_L over L_oa (positive forward).
 
     Examples
     --------
@@ -306,6 +436,23 @@ def wind_forces(ship, windage: Windage, u_g, v_g, psi, U_w, psi_w):
     ground velocity ``(u_g, v_g)`` (body axes, U_des units) and heading ``psi`` in a true wind ``U_w`` (U_des
     units) coming from ``psi_w``.
 
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship particulars (L, d, rho).
+    windage : Windage
+        Above-water geometry and wind-load parameters.
+    u_g : float or casadi.SX or casadi.MX
+        Surge velocity over the ground (U_des units).
+    v_g : float or casadi.SX or casadi.MX
+        Sway velocity over the ground (U_des units).
+    psi : float or casadi.SX or casadi.MX
+        Heading ψ (rad).
+    U_w : float or casadi.SX or casadi.MX
+        True wind speed (U_des units).
+    psi_w : float or casadi.SX or casadi.MX
+        Direction the true wind comes from (rad).
+
     Examples
     --------
     >>> from mmg_casadi.ship import load_kcs
@@ -325,6 +472,13 @@ def crab_angle(u_g, v_g):
     """Crab angle β_c = atan2(v_g, u_g) between heading and course over the ground (rad, positive when the ship
     is set to starboard); the course is ψ + β_c.
 
+    Parameters
+    ----------
+    u_g : float or casadi.SX or casadi.MX
+        Surge velocity over the ground (U_des units).
+    v_g : float or casadi.SX or casadi.MX
+        Sway velocity over the ground (U_des units).
+
     Examples
     --------
     >>> round(math.degrees(float(crab_angle(1.0, 0.1))), 4)   # set to starboard by 0.1 U
@@ -343,6 +497,21 @@ def gust_speeds(n_steps: int, dt: float, mean_speed: float, *, intensity: float 
     exactly: ``U[k+1] = m + a (U[k] - m) + σ sqrt(1 - a²) w[k]``, ``a = exp(-dt/T)``, ``w[k]`` standard normal,
     ``U[0]`` drawn from the stationary distribution; speeds are clipped at 0. A simple filtered noise in the
     sense of the issue; the spectral wind-gust models (Harris, NORSOK) of Fossen (2021) §10.1 are not used.
+
+    Parameters
+    ----------
+    n_steps : int
+        Number of samples (≥ 1).
+    dt : float
+        Sample interval (L/U_des, > 0).
+    mean_speed : float
+        Mean wind speed (U_des units, [0, 5]).
+    intensity : float, optional
+        Turbulence intensity σ/mean (in [0, 0.5]).
+    time_constant : float, optional
+        Correlation time T (L/U_des, > 0).
+    seed : int, optional
+        Seed of the random generator.
 
     Examples
     --------

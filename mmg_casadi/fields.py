@@ -45,6 +45,15 @@ class InverseSquareParams:
     8 L puts the stagnation point of its example (obstacle at (-10, 0), goal at (10, 0)) at 5.4 L from the
     obstacle, "around [-15, 0] ... merely 5L from the obstacle" as the paper reads it off its figure
     (d0 = R_safe = 15 L would put it at 6.2 L).
+
+    Parameters
+    ----------
+    k_att : float
+        Attractive gain (1/unit time, ≥ 0).
+    k_rep : float
+        Repulsive gain (L³/unit time, ≥ 0).
+    d0 : float
+        Influence distance of an obstacle from its rim (L, > 0).
     """
 
     k_att: float = param_field("k_att")
@@ -61,6 +70,13 @@ class SinkVortexParams:
 
     ``lam_sink``: strength Λ of the sink at the goal (L²/unit time, < 0 so that it attracts); ``k_vor``: strength
     K of the vortex at every active neighbour (L²/unit time, any real; < 0 turns a head-on ship to starboard).
+
+    Parameters
+    ----------
+    lam_sink : float
+        Sink strength Λ at the goal (L²/unit time, < 0 attracts).
+    k_vor : float
+        Vortex strength K at every active neighbour (L²/unit time).
     """
 
     lam_sink: float = param_field("lam_sink")
@@ -80,6 +96,19 @@ class ModifiedVortexParams:
     The paper writes R_tol there, but its laboratory code used the collision distance, 2 L, not the 3 L
     waypoint tolerance; 2 L is the default. ``gamma_max``: largest ``|γ|`` for which the vortex acts (rad,
     (0, π]); 5π/8 leaves the 112.5° stern sector (overtaking, stand-on) without vortex.
+
+    Parameters
+    ----------
+    lam_sink : float
+        Sink strength Λ at the goal (L²/unit time, < 0 attracts).
+    k_vor0 : float
+        Nominal vortex strength K⁰_vor (L²/unit time).
+    r_safe : float
+        Detection radius R_safe, the distance scale of the factor f (L, > 0).
+    r_tol : float
+        Distance in the tangential-velocity threshold (L, ≥ 0).
+    gamma_max : float
+        Largest ``|γ|`` for which the vortex acts (rad, in (0, π]).
     """
 
     lam_sink: float = param_field("lam_sink")
@@ -98,6 +127,13 @@ class WallParams:
 
     ``lam``: source strength per wall (L²/unit time, ≥ 0, pushes away from the wall); ``d_act``: perpendicular
     distance below which a wall acts (L, > 0).
+
+    Parameters
+    ----------
+    lam : float
+        Source strength per wall (L²/unit time, ≥ 0).
+    d_act : float
+        Perpendicular distance below which a wall acts (L, > 0).
     """
 
     lam: float = param_field("wall_lam")
@@ -174,6 +210,15 @@ def sink(pos, centre, lam):
     ``centre`` may hold K columns (K centres), giving one column per centre; ``lam`` is a scalar or 1×K.
     Λ < 0 (sink) points towards the centre.
 
+    Parameters
+    ----------
+    pos : array_like or casadi.SX or casadi.MX
+        Point (x, y) where the velocity is evaluated (L).
+    centre : array_like or casadi.SX or casadi.MX
+        Centre(s) of the source/sink, 2×K (L).
+    lam : array_like or casadi.SX or casadi.MX
+        Strength Λ, scalar or 1×K (L²/unit time).
+
     Examples
     --------
     >>> import casadi as ca
@@ -194,6 +239,15 @@ def vortex(pos, centre, k):
 
     ``centre`` may hold K columns, giving one column per centre; ``k`` is a scalar or 1×K. K < 0 circulates
     counter-clockwise (x up, y right), so a ship approaching the centre head-on is pushed to starboard.
+
+    Parameters
+    ----------
+    pos : array_like or casadi.SX or casadi.MX
+        Point (x, y) where the velocity is evaluated (L).
+    centre : array_like or casadi.SX or casadi.MX
+        Centre(s) of the vortex, 2×K (L).
+    k : array_like or casadi.SX or casadi.MX
+        Strength K, scalar or 1×K (L²/unit time).
 
     Examples
     --------
@@ -217,6 +271,25 @@ def inverse_square(own_pos, goal, nb_pos, nb_radius, active, *, k_att, k_rep, d0
     part is exactly −∇ of k_rep (1/ρ − 1/d0)² for ρ ≤ d0, else 0, with ρ = ‖X_n − X_o‖ − R_obs clipped at
     ``R_MIN``.
 
+    Parameters
+    ----------
+    own_pos : array_like or casadi.SX or casadi.MX
+        Own-ship position (x, y) (L).
+    goal : array_like or casadi.SX or casadi.MX
+        Goal position (x, y) (L).
+    nb_pos : array_like or casadi.SX or casadi.MX
+        Neighbour positions, 2×M, one column per neighbour (L).
+    nb_radius : array_like or casadi.SX or casadi.MX
+        1×M obstacle radii R_obs (L).
+    active : array_like or casadi.SX or casadi.MX
+        1×M flags, 1 where the neighbour is taken into account.
+    k_att : float
+        Attractive gain (1/unit time).
+    k_rep : float
+        Repulsive gain (L³/unit time).
+    d0 : float
+        Influence distance of an obstacle from its rim (L).
+
     Examples
     --------
     >>> import casadi as ca
@@ -238,6 +311,21 @@ def inverse_square(own_pos, goal, nb_pos, nb_radius, active, *, k_att, k_rep, d0
 
 def sink_vortex(own_pos, goal, nb_pos, active, *, lam_sink, k_vor):
     """Sink-vortex field: a sink of strength Λ at the goal plus a vortex of strength K at every active neighbour.
+
+    Parameters
+    ----------
+    own_pos : array_like or casadi.SX or casadi.MX
+        Own-ship position (x, y) (L).
+    goal : array_like or casadi.SX or casadi.MX
+        Goal position (x, y) (L).
+    nb_pos : array_like or casadi.SX or casadi.MX
+        Neighbour positions, 2×M, one column per neighbour (L).
+    active : array_like or casadi.SX or casadi.MX
+        1×M flags, 1 where the neighbour is taken into account.
+    lam_sink : float
+        Sink strength Λ at the goal (L²/unit time, < 0 attracts).
+    k_vor : float
+        Vortex strength K at every active neighbour (L²/unit time).
 
     Examples
     --------
@@ -267,6 +355,29 @@ def modified_vortex_terms(own_pos, own_psi, own_vel, nb_pos, nb_vel, *, k_vor0, 
     surrogates for gradient-based tuning: every indicator 1(a > b) becomes the logistic σ(s (a − b)) and
     max(1, z) becomes 1 + softplus_s(z − 1), softplus_s(x) = log(1 + exp(s x)) / s (both overflow-safe); they
     tend to the exact switches as s → ∞ (s is in the units of the compared quantities, rad and L/unit time).
+
+    Parameters
+    ----------
+    own_pos : array_like or casadi.SX or casadi.MX
+        Own-ship position (x, y) (L).
+    own_psi : float or casadi.SX or casadi.MX
+        Own-ship heading ψ (rad).
+    own_vel : array_like or casadi.SX or casadi.MX
+        Own-ship global velocity R(ψ) [u, v]ᵀ (L per unit time L/U).
+    nb_pos : array_like or casadi.SX or casadi.MX
+        Neighbour positions, 2×M, one column per neighbour (L).
+    nb_vel : array_like or casadi.SX or casadi.MX
+        Neighbour global velocities, 2×M (L per unit time L/U).
+    k_vor0 : float
+        Nominal vortex strength K⁰_vor (L²/unit time).
+    r_safe : float
+        Detection radius R_safe, the distance scale of the factor f (L).
+    r_tol : float
+        Distance in the tangential-velocity threshold −2 R_tol v_r / d (L).
+    gamma_max : float
+        Largest relative bearing ``|γ|`` for which the vortex acts (rad).
+    smooth : float or None, optional
+        Sharpness of smooth surrogates of the switches; ``None`` for the exact ones.
 
     Examples
     --------
@@ -307,6 +418,35 @@ def modified_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, 
     """Modified sink-vortex field: a sink at the goal plus, at every active neighbour, a vortex whose strength
     comes from :func:`modified_vortex_terms` (zero for neighbours drawing clear or astern).
 
+    Parameters
+    ----------
+    own_pos : array_like or casadi.SX or casadi.MX
+        Own-ship position (x, y) (L).
+    own_psi : float or casadi.SX or casadi.MX
+        Own-ship heading ψ (rad).
+    own_vel : array_like or casadi.SX or casadi.MX
+        Own-ship global velocity R(ψ) [u, v]ᵀ (L per unit time L/U).
+    goal : array_like or casadi.SX or casadi.MX
+        Goal position (x, y) (L).
+    nb_pos : array_like or casadi.SX or casadi.MX
+        Neighbour positions, 2×M, one column per neighbour (L).
+    nb_vel : array_like or casadi.SX or casadi.MX
+        Neighbour global velocities, 2×M (L per unit time L/U).
+    active : array_like or casadi.SX or casadi.MX
+        1×M flags, 1 where the neighbour is taken into account.
+    lam_sink : float
+        Sink strength Λ at the goal (L²/unit time, < 0 attracts).
+    k_vor0 : float
+        Nominal vortex strength K⁰_vor (L²/unit time).
+    r_safe : float
+        Detection radius R_safe, the distance scale of the factor f (L).
+    r_tol : float
+        Distance in the tangential-velocity threshold −2 R_tol v_r / d (L).
+    gamma_max : float
+        Largest relative bearing ``|γ|`` for which the vortex acts (rad).
+    smooth : float or None, optional
+        Sharpness of smooth surrogates of the switches; ``None`` for the exact ones.
+
     Examples
     --------
     >>> import casadi as ca
@@ -331,6 +471,19 @@ def channel_walls(pos, wall_a, wall_b, *, lam, d_act):
     perpendicular distance r is below ``d_act``; it then contributes V = Λ / (2π r) n (r clipped at ``R_MIN``),
     n the unit normal from the wall towards ``pos``.
 
+    Parameters
+    ----------
+    pos : array_like or casadi.SX or casadi.MX
+        Own-ship position (x, y) (L).
+    wall_a : array_like or casadi.SX or casadi.MX
+        Wall start points, 2×W (L).
+    wall_b : array_like or casadi.SX or casadi.MX
+        Wall end points, 2×W (L).
+    lam : float
+        Source strength per wall (L²/unit time).
+    d_act : float
+        Perpendicular distance below which a wall acts (L).
+
     Examples
     --------
     >>> import casadi as ca
@@ -352,6 +505,11 @@ def channel_walls(pos, wall_a, wall_b, *, lam, d_act):
 
 def heading_of(vec):
     """Heading atan2(v_y, v_x) (rad) of a 2-vector, the desired heading ψ_d of a field.
+
+    Parameters
+    ----------
+    vec : array_like or casadi.SX or casadi.MX
+        2-vector (v_x, v_y), e.g. a field velocity.
 
     Examples
     --------

@@ -28,6 +28,15 @@ class IlosParams:
 
     ``delta``: look-ahead distance Δ (L, > 0); ``k``: integral ratio, K_i^g = k K_p^g (dimensionless, ≥ 0);
     ``r_tol``: waypoint acceptance radius R_tol (L, > 0).
+
+    Parameters
+    ----------
+    delta : float
+        Look-ahead distance Δ (L, > 0).
+    k : float
+        Integral ratio k, with K_i^g = k K_p^g (dimensionless, ≥ 0).
+    r_tol : float
+        Waypoint acceptance radius R_tol (L, > 0).
     """
 
     delta: float = param_field("ilos_delta")
@@ -64,6 +73,11 @@ def _as_matrix(path):
 def wrap_angle(a):
     """Wrap an angle to (-π, π] via atan2(sin a, cos a).
 
+    Parameters
+    ----------
+    a : float or casadi.SX or casadi.MX
+        Angle to wrap (rad).
+
     Examples
     --------
     >>> import math
@@ -76,6 +90,13 @@ def wrap_angle(a):
 
 def path_tangential_angle(wp_prev, wp_next):
     """Path tangential angle π_p of the segment ``wp_prev`` → ``wp_next`` (all four quadrants).
+
+    Parameters
+    ----------
+    wp_prev : array_like or casadi.SX or casadi.MX
+        Start point (x, y) of the segment (L).
+    wp_next : array_like or casadi.SX or casadi.MX
+        End point (x, y) of the segment (L).
 
     Examples
     --------
@@ -91,6 +112,15 @@ def path_errors(pos, wp_prev, wp_next):
     """Along-track distance ``x_e`` and cross-track error ``y_e`` of ``pos`` w.r.t. a path segment (L).
 
     ``y_e > 0`` when the ship is to starboard of the path (e.g. path along +x, ship at y = +1).
+
+    Parameters
+    ----------
+    pos : array_like or casadi.SX or casadi.MX
+        Ship position (x, y) (L).
+    wp_prev : array_like or casadi.SX or casadi.MX
+        Start point (x, y) of the segment (L).
+    wp_next : array_like or casadi.SX or casadi.MX
+        End point (x, y) of the segment (L).
 
     Examples
     --------
@@ -109,6 +139,19 @@ def path_errors(pos, wp_prev, wp_next):
 def ilos_heading(pi_p, y_e, y_int, delta, k):
     """ILOS desired heading ψ_d = π_p − atan(y_e/Δ + (k/Δ) y_int), wrapped to (-π, π].
 
+    Parameters
+    ----------
+    pi_p : float or casadi.SX or casadi.MX
+        Path tangential angle π_p (rad).
+    y_e : float or casadi.SX or casadi.MX
+        Cross-track error (L).
+    y_int : float or casadi.SX or casadi.MX
+        ILOS integral state (L·L/U).
+    delta : float
+        Look-ahead distance Δ (L, > 0).
+    k : float
+        Integral ratio k (dimensionless, ≥ 0).
+
     Examples
     --------
     >>> import math
@@ -122,6 +165,17 @@ def ilos_integrator_rate(y_e, y_int, delta, k):
     """Rate of the ILOS integral state, ẏ_int = Δ y_e / (Δ² + (y_e + k y_int)²).
 
     ``|ẏ_int| ≤ |y_e|/Δ``, so y_int stays bounded whenever ``∫|y_e| dt`` is.
+
+    Parameters
+    ----------
+    y_e : float or casadi.SX or casadi.MX
+        Cross-track error (L).
+    y_int : float or casadi.SX or casadi.MX
+        ILOS integral state (L·L/U).
+    delta : float
+        Look-ahead distance Δ (L, > 0).
+    k : float
+        Integral ratio k (dimensionless, ≥ 0).
 
     Examples
     --------
@@ -142,6 +196,13 @@ def select_segment(path, idx):
     ``path`` holds the start position in column 0 and the waypoints in columns 1.. (padded to K columns by
     repeating the last waypoint). ``idx`` is the float index of the waypoint being tracked (1 ≤ idx ≤ K−1); the
     columns are picked by a one-hot sum, so ``idx`` may be a CasADi symbol.
+
+    Parameters
+    ----------
+    path : array_like or casadi.DM or casadi.SX or casadi.MX
+        2×K matrix of the start and waypoints (L).
+    idx : float or casadi.SX or casadi.MX
+        Float index of the tracked waypoint (1 ≤ idx ≤ K−1).
 
     Examples
     --------
@@ -164,6 +225,19 @@ def switch_waypoint(pos, path, idx, n, r_tol):
     number of real columns of ``path`` (start + waypoints, n ≥ 2). The flag is not latched: a closed loop should
     carry its own ``done`` state.
 
+    Parameters
+    ----------
+    pos : array_like or casadi.SX or casadi.MX
+        Ship position (x, y) (L).
+    path : array_like or casadi.DM or casadi.SX or casadi.MX
+        2×K matrix of the start and waypoints (L).
+    idx : float or casadi.SX or casadi.MX
+        Float index of the tracked waypoint.
+    n : int or float
+        Number of real columns of ``path`` (start + waypoints, ≥ 2).
+    r_tol : float
+        Waypoint acceptance radius R_tol (L).
+
     Examples
     --------
     >>> path = [[0, 10, 10], [0, 0, 10]]
@@ -183,6 +257,21 @@ def switch_waypoint(pos, path, idx, n, r_tol):
 def ilos_step_terms(pos, path, idx, y_int, delta, k):
     """All ILOS guidance terms for one step: a dict with ``psi_d``, ``y_e``, ``x_e``, ``pi_p``, ``y_int_dot``,
     ``wp_prev`` and ``wp_next``.
+
+    Parameters
+    ----------
+    pos : array_like or casadi.SX or casadi.MX
+        Ship position (x, y) (L).
+    path : array_like or casadi.DM or casadi.SX or casadi.MX
+        2×K matrix of the start and waypoints (L).
+    idx : float or casadi.SX or casadi.MX
+        Float index of the tracked waypoint.
+    y_int : float or casadi.SX or casadi.MX
+        ILOS integral state (L·L/U).
+    delta : float
+        Look-ahead distance Δ (L, > 0).
+    k : float
+        Integral ratio k (dimensionless, ≥ 0).
 
     Examples
     --------
@@ -206,6 +295,13 @@ def ilos_step_terms(pos, path, idx, y_int, delta, k):
 
 def validate_waypoints(points, field: str = "waypoints"):
     """Check a path given as a sequence of (x, y) points: at least two points (start and one waypoint).
+
+    Parameters
+    ----------
+    points : sequence of (float, float)
+        The start and the waypoints (x, y) (L).
+    field : str, optional
+        Name reported in the error if the path is invalid.
 
     Examples
     --------

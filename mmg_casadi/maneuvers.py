@@ -35,6 +35,19 @@ class ManeuverResult:
 
     ``states`` is ``(T, 7)`` in :data:`~mmg_casadi.model.STATE_NAMES` order, ``delta_c`` the commanded rudder
     (rad), ``metrics`` the dictionary written to ``metrics.json``.
+
+    Parameters
+    ----------
+    kind : str
+        Manoeuvre name, ``'turning'`` or ``'zigzag'``.
+    t : numpy.ndarray
+        Sample times, shape ``(T,)`` (L/U).
+    states : numpy.ndarray
+        State history, shape ``(T, 7)``.
+    delta_c : numpy.ndarray
+        Commanded rudder angle at each sample, shape ``(T,)`` (rad).
+    metrics : dict, optional
+        Manoeuvre metrics (empty by default).
     """
 
     kind: str
@@ -136,7 +149,19 @@ def _interp(arr, fidx):
 
 
 def turning_metrics(res: ManeuverResult, rudder_deg: float, port: bool, speed: float) -> dict:
-    """Advance, transfer, tactical diameter and steady turning of a turning-circle history."""
+    """Advance, transfer, tactical diameter and steady turning of a turning-circle history.
+
+    Parameters
+    ----------
+    res : ManeuverResult
+        Turning-circle history (must reach 180° of heading change).
+    rudder_deg : float
+        Rudder angle of the turn (deg), recorded in the metrics.
+    port : bool
+        True for a turn to port, False to starboard.
+    speed : float
+        Approach speed (fraction of the design speed), recorded in the metrics.
+    """
     psi = np.abs(res.state("psi"))
     x, y = res.state("x"), res.state("y")
     _, k90 = _crossing(res.t, psi, math.pi / 2)
@@ -202,7 +227,17 @@ def zigzag(angle_deg: float = 10.0, *, speed: float = 1.0, t_end: float = 40.0,
 
 
 def zigzag_metrics(res: ManeuverResult, sign: np.ndarray, angle_deg: float) -> dict:
-    """Overshoot angles and times of a zig-zag history with rudder-sign history ``sign``."""
+    """Overshoot angles and times of a zig-zag history with rudder-sign history ``sign``.
+
+    Parameters
+    ----------
+    res : ManeuverResult
+        Zig-zag history.
+    sign : numpy.ndarray
+        Rudder-command sign (±1) at each sample; needs three reversals.
+    angle_deg : float
+        Zig-zag rudder angle and heading trigger (deg).
+    """
     psi = np.degrees(res.state("psi"))
     rev = np.flatnonzero(np.diff(sign) != 0) + 1  # samples after each rudder reversal
     if len(rev) < 3:
@@ -222,6 +257,12 @@ def zigzag_metrics(res: ManeuverResult, sign: np.ndarray, angle_deg: float) -> d
 
 
 def validate_maneuver_args(kind: str) -> None:
-    """Raise :class:`ParameterError` for an unknown manoeuvre name."""
+    """Raise :class:`ParameterError` for an unknown manoeuvre name.
+
+    Parameters
+    ----------
+    kind : str
+        Manoeuvre name; ``'turning'`` or ``'zigzag'`` is accepted.
+    """
     if kind not in ("turning", "zigzag"):
         raise ParameterError("maneuver", "one of: turning, zigzag", kind)

@@ -30,6 +30,15 @@ def _mean_abs(t, x, name):
 def control_effort(t, delta, delta_max=DELTA_MAX_DEFAULT):
     """Controller effort CE = (1/(δ_max T)) ∫|δ| dt of the actual rudder ``delta`` (rad); ``delta_max`` in rad.
 
+    Parameters
+    ----------
+    t : array_like
+        Sample times (L/U).
+    delta : array_like
+        Actual rudder angle at each sample (rad).
+    delta_max : float, optional
+        Rudder saturation used for normalisation (rad, > 0); 35° by default.
+
     Examples
     --------
     >>> round(control_effort([0.0, 1.0, 2.0], [0.1, -0.1, 0.1], delta_max=0.2), 6)
@@ -41,6 +50,13 @@ def control_effort(t, delta, delta_max=DELTA_MAX_DEFAULT):
 
 def mean_cross_track_error(t, y_e):
     """Mean cross-track error MCTE = (1/T) ∫|y_e| dt, with ``y_e`` already in ship lengths (L).
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times (L/U).
+    y_e : array_like
+        Cross-track error at each sample (L).
 
     Examples
     --------
@@ -62,6 +78,13 @@ def _goal_index(t, reached):
 def time_to_goal(t, reached):
     """First time at which ``reached`` is true (nonzero), or ``None`` if it never is.
 
+    Parameters
+    ----------
+    t : array_like
+        Sample times (L/U).
+    reached : array_like
+        Goal-reached flag at each sample (true where > 0.5).
+
     Examples
     --------
     >>> time_to_goal([0.0, 1.0, 2.0], [0, 0, 1]), time_to_goal([0.0, 1.0], [False, False])
@@ -75,7 +98,17 @@ def time_to_goal(t, reached):
 @dataclass(frozen=True)
 class TrackingMetrics:
     """Tracking metrics of one trajectory: ``ce`` (dimensionless), ``mcte`` (L) and ``time_to_goal``
-    (non-dimensional time, ``None`` if the goal was never reached)."""
+    (non-dimensional time, ``None`` if the goal was never reached).
+
+    Parameters
+    ----------
+    ce : float
+        Controller effort CE (dimensionless).
+    mcte : float
+        Mean cross-track error MCTE (L).
+    time_to_goal : float or None
+        Time at which the goal was first reached (L/U), ``None`` if never.
+    """
 
     ce: float
     mcte: float
@@ -97,6 +130,21 @@ def tracking_metrics(t, delta, y_e, reached=None, *, delta_max=DELTA_MAX_DEFAULT
 
     With ``until_goal`` the integrals run only up to the first sample where ``reached`` is true (the voyage's
     total time T); if the goal is never reached (or ``reached`` is None) the whole trajectory is used.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times (L/U).
+    delta : array_like
+        Actual rudder angle at each sample (rad).
+    y_e : array_like
+        Cross-track error at each sample (L).
+    reached : array_like or None, optional
+        Goal-reached flag at each sample (true where > 0.5); ``None`` if unknown.
+    delta_max : float, optional
+        Rudder saturation used for the CE normalisation (rad, > 0); 35° by default.
+    until_goal : bool, optional
+        Integrate only up to the first sample where the goal is reached.
 
     Examples
     --------

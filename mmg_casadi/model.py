@@ -29,7 +29,13 @@ NX = len(STATE_NAMES)
 
 
 def mass_matrix(ship: ShipParams) -> np.ndarray:
-    """Rigid-body plus added mass matrix of eq. (mmg_nd)."""
+    """Rigid-body plus added mass matrix of eq. (mmg_nd).
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    """
     m, xg = ship.m, ship.xG_nd
     return np.array([
         [m + ship.mx, 0.0, 0.0],
@@ -43,6 +49,15 @@ def propeller_terms(ship: ShipParams, u, n_rpm):
 
     ``J = u' U_des (1 - w_P)/(n D_P)``, ``K_T = k0 + k1 J + k2 J²``, ``X_P = (1 - t_P) ρ K_T n² D_P⁴`` over
     ½ρU_des²Ld.
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    u : float or casadi.SX or casadi.MX
+        Non-dimensional surge velocity u' (units of U_des).
+    n_rpm : float or casadi.SX or casadi.MX
+        Propeller speed (rev/min).
     """
     n = n_rpm / 60.0
     J = u * ship.U_design * (1.0 - ship.wP) / (n * ship.DP)
@@ -52,7 +67,19 @@ def propeller_terms(ship: ShipParams, u, n_rpm):
 
 
 def hull_forces(ship: ShipParams, u, v, r):
-    """Hull forces X_H', Y_H', N_H' as polynomials in the drift angle β = atan2(-v', u') and r'."""
+    """Hull forces X_H', Y_H', N_H' as polynomials in the drift angle β = atan2(-v', u') and r'.
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    u : float or casadi.SX or casadi.MX
+        Non-dimensional surge velocity u' (units of U_des).
+    v : float or casadi.SX or casadi.MX
+        Non-dimensional sway velocity v' (units of U_des).
+    r : float or casadi.SX or casadi.MX
+        Non-dimensional yaw rate r' (rad per unit time L/U).
+    """
     b = ca.atan2(-v, u)
     XH = ship.X0 * u**2 + ship.Xbb * b**2 + ship.Xbr_minus_my * b * r + ship.Xrr * r**2 + ship.Xbbbb * b**4
     YH = (ship.Yb * b + ship.Yr_minus_mx * r + ship.Ybbb * b**3 + ship.Ybbr * b**2 * r + ship.Ybrr * b * r**2
@@ -67,6 +94,21 @@ def rudder_forces(ship: ShipParams, u, v, r, delta, n_rpm):
 
     The propeller-slipstream factor is written as ``u'(1 + κ(√(1 + 8K_T/(πJ²)) - 1))
     = u'(1 - κ) + κ √(u'² + 8K_T (u'/J)²/π)`` so that it stays finite at u' = 0.
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    u : float or casadi.SX or casadi.MX
+        Non-dimensional surge velocity u' (units of U_des).
+    v : float or casadi.SX or casadi.MX
+        Non-dimensional sway velocity v' (units of U_des).
+    r : float or casadi.SX or casadi.MX
+        Non-dimensional yaw rate r' (rad per unit time L/U).
+    delta : float or casadi.SX or casadi.MX
+        Rudder angle δ (rad).
+    n_rpm : float or casadi.SX or casadi.MX
+        Propeller speed (rev/min).
     """
     J, KT, _ = propeller_terms(ship, u, n_rpm)
     u_over_J = (n_rpm / 60.0) * ship.DP / (ship.U_design * (1.0 - ship.wP))
@@ -93,6 +135,23 @@ def mmg_rhs(ship: ShipParams, steering: SteeringParams, x, delta_c, n_rpm, env=N
     steering gear # eq. (delta_dot_equation). With ``env`` (4-vector ``[V_c, beta_c, U_w, psi_w]``) the wind
     load of ``windage`` (default :class:`~mmg_casadi.environment.Windage`) is added to the forces and the
     current to the kinematics; ``u, v`` are then velocities through the water.
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    steering : SteeringParams
+        Steering-gear parameters.
+    x : casadi.SX or casadi.MX
+        State vector (7) in :data:`STATE_NAMES` order (velocities in U_des, positions in L, angles rad).
+    delta_c : float or casadi.SX or casadi.MX
+        Commanded rudder angle (rad).
+    n_rpm : float or casadi.SX or casadi.MX
+        Propeller speed (rev/min).
+    env : casadi.SX or casadi.MX or sequence, optional
+        Disturbance ``[V_c, beta_c, U_w, psi_w]`` (speeds in U_des, directions rad); ``None`` for calm water.
+    windage : Windage, optional
+        Wind-load description; the default :class:`~mmg_casadi.environment.Windage` if ``None``.
     """
     u, v, r, psi, delta = x[0], x[1], x[2], x[5], x[6]
     XH, YH, NH = hull_forces(ship, u, v, r)
@@ -123,6 +182,17 @@ def build_mmg(ship: ShipParams | None = None, steering: SteeringParams | None = 
     ``mmg_env(x[7], delta_c, n_rpm, env[4]) -> xdot[7]`` with the disturbance ``env = [V_c, beta_c, U_w, psi_w]``
     as an input (see :mod:`mmg_casadi.environment`; ``windage`` defaults to the KCS estimate there).
 
+    Parameters
+    ----------
+    ship : ShipParams, optional
+        Ship parameters (default: the KCS).
+    steering : SteeringParams, optional
+        Steering gear (default: the KCS's).
+    disturbed : bool, optional
+        Add the disturbance input ``env``.
+    windage : Windage, optional
+        Wind-load description used when ``disturbed``.
+
     Examples
     --------
     >>> f = build_mmg()
@@ -148,7 +218,19 @@ def build_mmg(ship: ShipParams | None = None, steering: SteeringParams | None = 
 
 
 def rk4(f, x, args, h):
-    """One classical Runge–Kutta step of ``ẋ = f(x, *args)`` with step ``h`` (inputs held over the step)."""
+    """One classical Runge–Kutta step of ``ẋ = f(x, *args)`` with step ``h`` (inputs held over the step).
+
+    Parameters
+    ----------
+    f : casadi.Function or callable
+        Right-hand side ``f(x, *args)``.
+    x : casadi.SX or casadi.MX or casadi.DM
+        State at the start of the step.
+    args : tuple
+        Further inputs of ``f``, held constant over the step.
+    h : float or casadi.SX or casadi.MX
+        Step size (L/U).
+    """
     k1 = f(x, *args)
     k2 = f(x + 0.5 * h * k1, *args)
     k3 = f(x + 0.5 * h * k2, *args)
@@ -161,6 +243,13 @@ def build_rk4_step(f: ca.Function | None = None, n_sub: int = 1) -> ca.Function:
 
     For a disturbed model (``build_mmg(disturbed=True)``) the Function is
     ``rk4_step_env(x, delta_c, n_rpm, dt, env) -> x_next``, the disturbance held over the step.
+
+    Parameters
+    ----------
+    f : casadi.Function, optional
+        Model from :func:`build_mmg` (default: the calm-water KCS model).
+    n_sub : int, optional
+        Number of RK4 sub-steps per step ``dt``.
 
     Examples
     --------
@@ -193,6 +282,17 @@ def build_cvodes(f: ca.Function | None = None, t_grid=None, *, reltol=1e-10, abs
     """Adaptive CVODES integrator of the same model with constant inputs, outputs at ``t_grid``.
 
     Parameters ``p = [delta_c, n_rpm]``, or ``[delta_c, n_rpm, V_c, beta_c, U_w, psi_w]`` for a disturbed model.
+
+    Parameters
+    ----------
+    f : casadi.Function, optional
+        Model from :func:`build_mmg` (default: the calm-water KCS model).
+    t_grid : sequence of float
+        Output times (L/U).
+    reltol : float, optional
+        Relative tolerance of CVODES.
+    abstol : float, optional
+        Absolute tolerance of CVODES.
     """
     f = f or build_mmg()
     x = ca.SX.sym("x", NX)
@@ -218,6 +318,13 @@ def propeller_rpm_for_speed(speed: float, ship: ShipParams | None = None) -> flo
     """Propeller speed (rev/min) at which the ship's steady straight-line speed is ``speed`` × U_des.
 
     Solves the surge balance X_H(u', 0, 0) + X_P(u', n) = 0 for n with a CasADi Newton rootfinder.
+
+    Parameters
+    ----------
+    speed : float
+        Steady speed as a fraction of the design speed U_des (> 0).
+    ship : ShipParams, optional
+        Ship parameters (default: the KCS).
 
     Examples
     --------
