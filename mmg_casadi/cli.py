@@ -293,7 +293,13 @@ def _flag(field: str, a) -> str:
 
 
 def main(argv=None) -> int:
-    """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Command-line arguments without the program name (default ``sys.argv[1:]``).
+    """
     from .signals import exit_status, signal_name, terminate_as_interrupt
     parser = build_parser()
     a = None

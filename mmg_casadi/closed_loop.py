@@ -201,6 +201,21 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
     ``ships[i]`` has ``n_rpm``, ``path`` (K_i x 2 array: start then waypoints) and ``stays``; paths are padded to
     ``layout.max_path`` columns by repeating the last waypoint. ``obstacles`` are ``(x, y, radius)``, walls
     ``(ax, ay, bx, by)``; ``env`` the :data:`ENV_INPUTS` of a disturbed layout (:func:`env_values`).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the scenario.
+    globals_ : dict
+        The step's global numeric inputs (:func:`default_globals`, :func:`step_values`).
+    ships : list of dict
+        Per ship ``n_rpm``, ``path`` (L) and ``stays``.
+    obstacles : sequence of (float, float, float), optional
+        Static obstacles ``(x, y, radius)`` (L).
+    walls : sequence of (float, float, float, float), optional
+        Wall segments ``(ax, ay, bx, by)`` (L).
+    env : dict, optional
+        The :data:`ENV_INPUTS` of a disturbed layout (:func:`env_values`).
     """
     vals = [float(globals_[name]) for name in GLOBAL_PARAMS]
     for i, s in enumerate(ships):
@@ -226,7 +241,15 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
 
 
 def initial_state(layout: Layout, ships: list[dict]) -> np.ndarray:
-    """Scenario state at t = 0: each ship at ``start`` with ``heading`` (rad) and surge speed ``speed`` × U_des."""
+    """Scenario state at t = 0: each ship at ``start`` with ``heading`` (rad) and surge speed ``speed`` × U_des.
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the scenario.
+    ships : list of dict
+        Per ship ``start`` (L), ``heading`` (rad), ``speed`` (fraction of U_des) and ``path`` (L).
+    """
     x = np.zeros(layout.nx)
     for i, s in enumerate(ships):
         row = np.zeros(NS)
@@ -260,6 +283,17 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
 
     ``aux`` (NAUX x N) holds per ship the commanded rudder, desired heading, cross-track error and whether the
     reactive guidance was in charge during the step.
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the scenario.
+    ship : mmg_casadi.ship.ShipParams, optional
+        Hull and propulsion parameters (default: the KCS, :func:`~mmg_casadi.ship.load_kcs`).
+    steering : mmg_casadi.ship.SteeringParams, optional
+        Steering-gear parameters (default: :func:`~mmg_casadi.ship.load_steering`).
+    n_sub : int, default 1
+        Number of RK4 sub-steps per guidance step.
     """
     ship = ship or load_kcs()
     steering = steering or load_steering()
@@ -425,7 +459,17 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
 
 def build_guidance(layout: Layout, ship: ShipParams | None = None,
                    steering: SteeringParams | None = None) -> ca.Function:
-    """Guidance-and-control part only: ``guidance_<key>(x, p) -> delta_c (1 x N)``, for timing the methods."""
+    """Guidance-and-control part only: ``guidance_<key>(x, p) -> delta_c (1 x N)``, for timing the methods.
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the scenario.
+    ship : mmg_casadi.ship.ShipParams, optional
+        Hull and propulsion parameters (default: the KCS, :func:`~mmg_casadi.ship.load_kcs`).
+    steering : mmg_casadi.ship.SteeringParams, optional
+        Steering-gear parameters (default: :func:`~mmg_casadi.ship.load_steering`).
+    """
     step = build_closed_loop_step(layout, ship, steering)
     x = ca.SX.sym("x", layout.nx)
     p = ca.SX.sym("p", layout.np)
@@ -434,7 +478,15 @@ def build_guidance(layout: Layout, ship: ShipParams | None = None,
 
 
 def ship_rows(layout: Layout, X: np.ndarray) -> np.ndarray:
-    """Reshape scenario states ``(nx, T)`` (or ``(nx,)``) to ``(T, N, NS)`` (or ``(N, NS)``)."""
+    """Reshape scenario states ``(nx, T)`` (or ``(nx,)``) to ``(T, N, NS)`` (or ``(N, NS)``).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the scenario.
+    X : numpy.ndarray
+        Scenario states, ``(nx, T)`` or ``(nx,)``.
+    """
     X = np.asarray(X)
     if X.ndim == 1:
         return X[1:].reshape(layout.n_ships, NS)
@@ -444,6 +496,11 @@ def ship_rows(layout: Layout, X: np.ndarray) -> np.ndarray:
 def step_values(resolved: dict) -> dict:
     """The step's numeric inputs (:data:`GLOBAL_PARAMS` and the ``inputs`` of every
     :class:`~mmg_casadi.methods.Method`) from a resolved parameter set (table angles in degrees to rad).
+
+    Parameters
+    ----------
+    resolved : dict
+        A resolved parameter set (table names and units).
 
     Examples
     --------
@@ -520,6 +577,11 @@ def env_values(resolved: dict, ship: ShipParams | None = None) -> list[float]:
 def default_globals(**overrides) -> dict:
     """The step's numeric inputs for the table's defaults updated with ``overrides`` (table names), checked.
 
+    Parameters
+    ----------
+    **overrides : float
+        Parameter values by table name, replacing the defaults.
+
     Examples
     --------
     >>> g = default_globals(kp=2.0)
@@ -541,6 +603,15 @@ def ship_outcome(row, t_end: float, stall_window: float) -> tuple[str, tuple[flo
     """Outcome of one ship from its final state row (:data:`SHIP_STATE`) — the one judgement every runner uses.
 
     Returns the outcome (one of :data:`OUTCOMES`) and, for ``"stalled"``, the position closest to the goal.
+
+    Parameters
+    ----------
+    row : numpy.ndarray (NS,)
+        Final state row of the ship (:data:`SHIP_STATE`).
+    t_end : float
+        End time of the run (L/U).
+    stall_window : float
+        A ship that has not come closer to its goal for this long is stalled (L/U).
 
     Examples
     --------
@@ -568,6 +639,15 @@ def voyage_metrics(rows: np.ndarray, t_end: float, delta_max: float) -> tuple[np
     (crosstrack_metric_equation)) with the integrals accumulated by the compiled step while the ship sails
     (trapezoidal in δ, the cross-track error sampled at each step's start) and ``T`` the time to goal, or the
     end time for a ship still sailing; ``nan`` for a diverged ship (its voyage time is not in the state).
+
+    Parameters
+    ----------
+    rows : numpy.ndarray (N, NS)
+        Final state rows of the ships.
+    t_end : float
+        End time of the run (L/U).
+    delta_max : float
+        Largest rudder angle δ_max (rad).
 
     Examples
     --------

@@ -44,6 +44,11 @@ ENCOUNTERS = ("overtaking", "overtaken", "head-on", "crossing-give-way", "crossi
 def wrap_to_pi(angle):
     """``angle`` (rad, scalar or array) wrapped into [-π, π).
 
+    Parameters
+    ----------
+    angle : float or numpy.ndarray
+        Angle(s) to wrap (rad).
+
     Examples
     --------
     >>> round(wrap_to_pi(3 * math.pi / 2), 6), round(wrap_to_pi(-0.5), 6)
@@ -108,6 +113,43 @@ class ColregProfile:
     alterations take 1.4, 2.5 and 3.7 L/U; at TCPA 4 a 60° alteration can still be completed before the CPA,
     at TCPA 2 not even a 30° one. :meth:`ntnu_2023` is a published scheme, :meth:`strict` a narrow head-on
     sector.
+
+    Parameters
+    ----------
+    name : str, default 'iitm-lab'
+        Name of the profile.
+    head_on : tuple of float
+        Head-on sector of the relative heading (rad).
+    give_way : tuple of float
+        Give-way (crossing) sector of the relative heading (rad).
+    stand_on : tuple of float
+        Stand-on (crossing) sector of the relative heading (rad).
+    stern_sector : tuple of float
+        Sector of the relative bearing that counts as astern (rad).
+    course_tolerance_deg : float, default 15.0
+        Largest heading change that still keeps the course (degrees).
+    starboard_min_deg : float, default 5.0
+        Smallest alteration that counts as altering course (degrees).
+    head_on_bearing_deg : float or None, optional
+        Bearing half-angle that decides head-on instead of ``head_on`` (degrees).
+    overtaking_bow_deg : float or None, optional
+        Bow half-angle within which the overtaken ship must lie (degrees).
+    action_deg : float, default 2.0
+        Heading change that marks the time of action (degrees).
+    apparent_deg : float, default 10.0
+        Smallest readily apparent alteration of course (degrees).
+    speed_apparent : float, default 0.5
+        Smallest readily apparent speed reduction (fraction of the speed at ``t_enter``).
+    speed_tolerance : float, default 0.2
+        Largest speed change that still keeps the speed (fraction of the speed at ``t_enter``).
+    act_range : float, default 0.0
+        Smallest range for action in ample time (L; 0 switches it off).
+    act_tcpa : float, default 4.0
+        Smallest TCPA for action in ample time (L/U; 0 switches it off).
+    must_act_range : float, default 0.0
+        Range at or below which the stand-on ship must act (L; 0 switches it off).
+    must_act_tcpa : float, default 2.0
+        TCPA at or below which the stand-on ship must act (L/U; 0 switches it off).
 
     Examples
     --------
@@ -199,6 +241,11 @@ class ColregProfile:
         full-scale distances (1100 m = 4.78 L, 200 m = 0.87 L). The scheme was tuned on smaller ships; a
         length-scaled reading would pass the length of the ship the ranges were meant for instead.
 
+        Parameters
+        ----------
+        metres_per_length : float, default 230.0
+            Metres per ship length L used to convert the scheme's ranges.
+
         Examples
         --------
         >>> p = ColregProfile.ntnu_2023()
@@ -219,6 +266,11 @@ PROFILES = ("iitm-lab", "ntnu-2023", "strict")  #: names accepted by :func:`get_
 
 def get_profile(profile=None) -> ColregProfile:
     """A :class:`ColregProfile` from its name (one of :data:`PROFILES`), itself, or ``None`` (the laboratory's).
+
+    Parameters
+    ----------
+    profile : str or ColregProfile or None, optional
+        Profile name, a profile, or ``None`` for ``iitm-lab``.
 
     Examples
     --------
@@ -325,6 +377,25 @@ class PairAssessment:
     b's point of view; ``t_enter``: the time the distance first drops below ``r_safe`` (``None`` if never);
     ``rules``: the rule-by-rule verdicts behind ``compliant``/``compliant_b``
     (:meth:`mmg_casadi.colregs_score.PairScore.to_dict`; ``None`` for an obstacle; not compared by ``==``).
+
+    Parameters
+    ----------
+    min_distance : float
+        Smallest centre distance while both are active (L).
+    t_min : float or None
+        Time of the smallest distance (L/U).
+    encounter : str
+        Encounter type from a's point of view.
+    compliant : bool or None
+        Whether a kept every rule that applies to her.
+    encounter_b : str
+        Encounter type from b's point of view.
+    compliant_b : bool or None
+        Whether b kept every rule that applies to her.
+    t_enter : float or None
+        Time the distance first drops below ``r_safe`` (L/U).
+    rules : dict or None, optional
+        Rule-by-rule verdicts behind ``compliant`` and ``compliant_b``.
 
     Examples
     --------
@@ -437,6 +508,21 @@ def assess_obstacle(t, pos_a, obstacle_pos, radius, collision_distance, *, activ
     between centres, as for ships, widened for obstacles so large that half a ship length beyond their edge
     lies farther out (radius > collision_distance − 0.5 L). The obstacle side has ``encounter_b = "static"`` and
     ``compliant_b = None``; ``t_enter`` is ``None`` (no safe radius is involved).
+
+    Parameters
+    ----------
+    t : array-like (T,)
+        Sample times (L/U).
+    pos_a : array-like (T, 2)
+        Positions of ship a (L).
+    obstacle_pos : array-like (2,)
+        Centre of the obstacle (L).
+    radius : float
+        Radius of the obstacle (L).
+    collision_distance : float
+        Collision distance between centres (L).
+    active_a : array-like of bool (T,), optional
+        Whether ship a is active at each time (default: always).
 
     Examples
     --------

@@ -40,6 +40,13 @@ def cpa_tcpa(rel_pos, rel_vel):
     ``rel_pos`` = other − own position, ``rel_vel`` = other − own velocity, arrays (..., 2). TCPA is negative
     when the ships are moving apart (then CPA is the current range) and ``inf`` with no relative motion.
 
+    Parameters
+    ----------
+    rel_pos : array-like (..., 2)
+        Other minus own position (L).
+    rel_vel : array-like (..., 2)
+        Other minus own velocity (L per unit time).
+
     Examples
     --------
     >>> cpa, tcpa = cpa_tcpa(np.array([[10.0, 0.0], [10.0, 1.0]]), np.array([[-2.0, 0.0], [-2.0, 0.0]]))
@@ -122,6 +129,19 @@ class SideScore:
     quantities behind the verdict; ``quantities``: the encounter's quantities from this side (see
     :func:`score_pair`); ``compliant_all``: all applicable rules satisfied (``None`` if none applies).
 
+    Parameters
+    ----------
+    encounter : str
+        Encounter type from this ship's point of view.
+    verdicts : dict
+        ``{rule: True | False | None}`` for every key of :data:`RULES`.
+    details : dict
+        Per applicable rule, the quantities behind the verdict.
+    quantities : dict
+        The encounter's quantities from this side.
+    compliant_all : bool or None
+        Whether all applicable rules are satisfied (``None`` if none applies).
+
     Examples
     --------
     >>> s = SideScore("none", dict.fromkeys(RULES), {}, {}, None)
@@ -147,6 +167,15 @@ class SideScore:
 @dataclass(frozen=True)
 class PairScore:
     """Rule verdicts of both ships of a pair under one profile (``a``, ``b``: :class:`SideScore`).
+
+    Parameters
+    ----------
+    profile : str
+        Name of the COLREG profile used.
+    a : SideScore
+        Verdicts of ship a.
+    b : SideScore
+        Verdicts of ship b.
 
     Examples
     --------

@@ -59,6 +59,25 @@ def check_range(field: str, value, low=None, high=None, *, low_open=False, high_
                 cls=ParameterError, unit: str = "") -> float:
     """Return ``float(value)`` if it lies in the given interval, else raise ``cls``.
 
+    Parameters
+    ----------
+    field : str
+        Name of the checked field, used in the error message.
+    value : float-like
+        The value to check.
+    low : float or None, optional
+        Lower bound (``None``: unbounded).
+    high : float or None, optional
+        Upper bound (``None``: unbounded).
+    low_open : bool, default False
+        Whether ``low`` itself is excluded.
+    high_open : bool, default False
+        Whether ``high`` itself is excluded.
+    cls : type, default ParameterError
+        Exception class raised for a value out of range.
+    unit : str, default ''
+        Unit shown after the bounds in the error message.
+
     Examples
     --------
     >>> check_range("delta", 2.0, 0.0, None, low_open=True)

@@ -170,6 +170,13 @@ PAPER: tuple[str, ...] = ("inverse-square", "sink-vortex", "modified-vortex", "v
 def get(name, field: str = "method") -> Method:
     """The registered method ``name``, or an :class:`~mmg_casadi.errors.InputError` naming ``field``.
 
+    Parameters
+    ----------
+    name : str
+        Name of the method.
+    field : str, default 'method'
+        Name of the input field, used in the error message.
+
     Examples
     --------
     >>> get("none").builder is None
@@ -186,6 +193,13 @@ def get(name, field: str = "method") -> Method:
 
 def parse_list(value, field: str = "methods") -> tuple[str, ...]:
     """Method names from a comma-separated string or an iterable, checked and deduplicated.
+
+    Parameters
+    ----------
+    value : str or iterable of str
+        Method names, comma-separated or as an iterable.
+    field : str, default 'methods'
+        Name of the input field, used in the error message.
 
     Examples
     --------

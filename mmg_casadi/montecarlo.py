@@ -117,6 +117,19 @@ def sampled_scenario(environment: int, method: str, run: int, base_seed: int = 0
     """The scenario of run ``run`` of ``environment`` with every ship using ``method`` and the parameter values
     ``params`` written into its settings (replayable on its own).
 
+    Parameters
+    ----------
+    environment : int
+        Environment number.
+    method : str
+        Collision-avoidance method of every ship.
+    run : int
+        Run index.
+    base_seed : int, default 0
+        Base seed of the scenario sampling.
+    params : dict or None, optional
+        Parameter values (table names) written into the settings.
+
     Examples
     --------
     >>> sc = sampled_scenario(1, "modified-vortex", 0, params={"t_max": 100.0})
@@ -135,6 +148,15 @@ def _non_default(params: dict | None) -> dict:
 
 def layout_for(environment: int, method: str, params: dict | None = None) -> Layout:
     """The closed-loop :class:`Layout` shared by all runs of ``(environment, method)`` with ``params``.
+
+    Parameters
+    ----------
+    environment : int
+        Environment number.
+    method : str
+        Collision-avoidance method.
+    params : dict or None, optional
+        Parameter overrides (table names).
 
     Examples
     --------
@@ -224,6 +246,19 @@ def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: flo
     The compiled guidance Function (:func:`~mmg_casadi.simulation.compiled_guidance`) is mapped over the
     columns (tiled to at least :data:`MIN_TIMING_COLUMNS`), called once to warm up and then repeatedly for
     about ``min_time`` seconds; the result is ``elapsed / (repeats * columns * N)``.
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout of the scenarios.
+    X : numpy.ndarray (nx, K)
+        Scenario states, one column per call.
+    P : numpy.ndarray (np, K)
+        Parameter vectors, one column per call (:func:`~mmg_casadi.closed_loop.pack_params`).
+    min_time : float, default 0.02
+        Approximate measuring time (seconds).
+    max_repeats : int, default 50
+        Largest number of timed calls.
     """
     X = np.asarray(X, float)
     P = np.asarray(P, float)
@@ -384,7 +419,25 @@ def _run_disturbances(environment: int, runs, base_seed: int, params: dict | Non
 @dataclass(frozen=True)
 class BatchTask:
     """One unit of work: runs of one (environment, method) with one parameter set (``params``: sorted
-    ``(name, value)`` pairs of the overrides) and the ranges of the per-run disturbance."""
+    ``(name, value)`` pairs of the overrides) and the ranges of the per-run disturbance.
+
+    Parameters
+    ----------
+    environment : int
+        Environment number.
+    method : str
+        Collision-avoidance method.
+    runs : tuple of int
+        Run indices of the batch.
+    base_seed : int, default 0
+        Base seed of the scenario sampling.
+    params : tuple, optional
+        Sorted ``(name, value)`` pairs of the parameter overrides.
+    chunk : int, optional
+        Steps per ``mapaccum`` chunk.
+    disturbance : DisturbanceRanges or None, optional
+        Ranges of the per-run disturbance (``None``: undisturbed).
+    """
 
     environment: int
     method: str
@@ -410,6 +463,27 @@ def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int =
 
     Batches are interleaved over the cells (first batch of every cell, then the second, ...), so the
     progress rate and ETA are representative early on and the heavy cells do not all come last.
+
+    Parameters
+    ----------
+    envs : iterable of int
+        Environment numbers.
+    methods : iterable of str
+        Collision-avoidance methods.
+    runs : int
+        Number of runs per (environment, method).
+    done : collection of tuple, optional
+        Keys ``(environment, method, run)`` already stored, skipped.
+    base_seed : int, default 0
+        Base seed of the scenario sampling.
+    params : dict or None, optional
+        Parameter overrides (table names).
+    batch_size : int, default 128
+        Largest number of runs per batch.
+    chunk : int, optional
+        Steps per ``mapaccum`` chunk.
+    disturbance : DisturbanceRanges or None, optional
+        Ranges of the per-run disturbance (``None``: undisturbed).
 
     Examples
     --------
@@ -536,7 +610,13 @@ class LocalExecutor:
         return self.workers
 
     def run(self, tasks):
-        """Yield ``(task, rows)`` for every task as it completes (completion order)."""
+        """Yield ``(task, rows)`` for every task as it completes (completion order).
+
+        Parameters
+        ----------
+        tasks : iterable of BatchTask
+            The batches to run.
+        """
         tasks = list(tasks)
         if self.workers == 1 or len(tasks) <= 1:
             for t in tasks:
@@ -576,6 +656,13 @@ class RayExecutor:
     worker dies is rerun up to :data:`RAY_MAX_RETRIES` times (a batch that raises is not); each batch result
     is yielded once and :meth:`ResultsTable.append <mmg_casadi.results.ResultsTable.append>` skips stored
     keys, so no run is lost or counted twice.
+
+    Parameters
+    ----------
+    address : str or None, optional
+        Address of the Ray cluster passed to ``ray.init``.
+    num_cpus : int or None, optional
+        CPUs of a new local Ray cluster.
     """
 
     def __init__(self, address: str | None = None, num_cpus: int | None = None):
@@ -615,7 +702,13 @@ class RayExecutor:
         return self.num_cpus or os.cpu_count() or 1
 
     def run(self, tasks):
-        """Yield ``(task, rows)`` for every task as it completes (completion order)."""
+        """Yield ``(task, rows)`` for every task as it completes (completion order).
+
+        Parameters
+        ----------
+        tasks : iterable of BatchTask
+            The batches to run.
+        """
         import ray
         tasks = list(tasks)
         if not tasks:

@@ -105,6 +105,15 @@ class Param:
     def check(self, value, field: str | None = None, cls=ParameterError):
         """``value`` converted to this parameter's type if allowed, else ``cls`` naming ``field`` (default: name).
 
+        Parameters
+        ----------
+        value : object
+            The value to check.
+        field : str or None, optional
+            Name used in the error message (default: the parameter's name).
+        cls : type, default ParameterError
+            Exception class raised for an invalid value.
+
         Examples
         --------
         >>> PARAMETERS["vo_candidates"].check(40)
@@ -264,6 +273,17 @@ STRUCTURAL = tuple(n for n, p in PARAMETERS.items() if p.structural)
 def check_value(name: str, value, *, field: str | None = None, cls=ParameterError):
     """``value`` checked against parameter ``name`` (unknown names raise ``cls`` listing the known ones).
 
+    Parameters
+    ----------
+    name : str
+        Table name of the parameter.
+    value : object
+        The value to check.
+    field : str or None, optional
+        Name used in the error message (default: ``name``).
+    cls : type, default ParameterError
+        Exception class raised for an invalid value or unknown name.
+
     Examples
     --------
     >>> check_value("ilos_k", 0.1)
@@ -310,6 +330,13 @@ def resolve(*layers: dict | None, cls=ParameterError, prefix: str = "") -> dict:
 def diff(a: dict, b: dict) -> str | None:
     """First key (table order) whose value differs between two resolved sets, or None.
 
+    Parameters
+    ----------
+    a : dict
+        A resolved parameter set.
+    b : dict
+        Another resolved parameter set.
+
     Examples
     --------
     >>> diff(resolve(), resolve({"kd": 3.0}))
@@ -323,6 +350,11 @@ def diff(a: dict, b: dict) -> str | None:
 
 def group(name: str) -> tuple[str, ...]:
     """Names of the parameters of one group.
+
+    Parameters
+    ----------
+    name : str
+        Name of the parameter group.
 
     Examples
     --------
@@ -338,6 +370,13 @@ def field(name: str, attr_unit_scale: float = 1.0):
     """A dataclass field whose default is parameter ``name``'s, scaled by ``attr_unit_scale``.
 
     Used by the parameter dataclasses so their defaults are the table's; :func:`check_fields` checks them.
+
+    Parameters
+    ----------
+    name : str
+        Table name of the parameter.
+    attr_unit_scale : float, default 1.0
+        Factor from the table's unit to the attribute's (e.g. degrees to rad).
     """
     return dataclasses.field(default=PARAMETERS[name].default * attr_unit_scale,
                              metadata={"param": name, "scale": attr_unit_scale})
@@ -347,6 +386,11 @@ def check_fields(obj) -> None:
     """Check every field of a parameter dataclass made with :func:`field` against the table.
 
     The error names the table's parameter (e.g. ``ilos_delta``), the name used everywhere else.
+
+    Parameters
+    ----------
+    obj : dataclass instance
+        A parameter dataclass whose fields were made with :func:`field`.
     """
     for f in dataclasses.fields(obj):
         if "param" in f.metadata:

@@ -17,7 +17,21 @@ COLORS = ("tab:blue", "tab:red", "tab:green", "tab:orange", "tab:purple", "tab:b
 
 
 def ship_outline(x: float, y: float, psi: float, length: float = 1.0, beam: float = 0.14) -> np.ndarray:
-    """Polygon (marine view coordinates: columns east, north) of a ship of ``length`` at (x, y) heading ``psi``."""
+    """Polygon (marine view coordinates: columns east, north) of a ship of ``length`` at (x, y) heading ``psi``.
+
+    Parameters
+    ----------
+    x : float
+        North position (L).
+    y : float
+        East position (L).
+    psi : float
+        Heading (rad).
+    length : float, default 1.0
+        Ship length (L).
+    beam : float, default 0.14
+        Ship beam (L).
+    """
     body = np.array([[0.5, 0.0], [0.3, beam / 2], [-0.5, beam / 2], [-0.5, -beam / 2], [0.3, -beam / 2]]) * [
         length, 1.0]
     c, s = math.cos(psi), math.sin(psi)
@@ -27,11 +41,48 @@ def ship_outline(x: float, y: float, psi: float, length: float = 1.0, beam: floa
 
 
 def draw_ship(ax, x, y, psi, color, **kw):
+    """Draw a filled ship outline (:func:`ship_outline`) on ``ax``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    x : float
+        North position (L).
+    y : float
+        East position (L).
+    psi : float
+        Heading (rad).
+    color : color
+        Fill colour.
+    **kw : dict
+        Further keyword arguments of :class:`matplotlib.patches.Polygon`.
+    """
     ax.add_patch(Polygon(ship_outline(x, y, psi), closed=True, facecolor=color, edgecolor="k", lw=0.5, **kw))
 
 
 def draw_path(ax, x, y, psi, color, label=None, n_outlines=6, start=True):
-    """Path in the marine view with ship outlines at ``n_outlines`` evenly spaced times."""
+    """Path in the marine view with ship outlines at ``n_outlines`` evenly spaced times.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    x : array-like
+        North positions (L).
+    y : array-like
+        East positions (L).
+    psi : array-like
+        Headings (rad).
+    color : color
+        Line and outline colour.
+    label : str, optional
+        Legend label of the path.
+    n_outlines : int, default 6
+        Number of ship outlines drawn (0: none).
+    start : bool, default True
+        Whether to mark the start with a star.
+    """
     ax.plot(y, x, color=color, lw=1.5, label=label)
     if len(x) > 1 and n_outlines:
         for k in np.linspace(0, len(x) - 1, n_outlines).astype(int):
@@ -41,16 +92,57 @@ def draw_path(ax, x, y, psi, color, label=None, n_outlines=6, start=True):
 
 
 def draw_goal(ax, gx, gy, color, tol=None):
+    """Mark a goal with a star on ``ax``, with its tolerance circle when ``tol`` is given.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    gx : float
+        North position of the goal (L).
+    gy : float
+        East position of the goal (L).
+    color : color
+        Marker colour.
+    tol : float, optional
+        Goal tolerance radius (L); no circle when ``None`` or 0.
+    """
     ax.plot(gy, gx, marker="*", color=color, ms=12, mec="k", ls="none")
     if tol:
         ax.add_patch(Circle((gy, gx), tol, fill=False, ls=":", color=color))
 
 
 def draw_circle(ax, x, y, radius, color="r", ls=":", **kw):
+    """Draw an unfilled circle on ``ax`` in the marine view.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    x : float
+        North position of the centre (L).
+    y : float
+        East position of the centre (L).
+    radius : float
+        Radius (L).
+    color : color, default 'r'
+        Line colour.
+    ls : str, default ':'
+        Line style.
+    **kw : dict
+        Further keyword arguments of :class:`matplotlib.patches.Circle`.
+    """
     ax.add_patch(Circle((y, x), radius, fill=False, ls=ls, color=color, **kw))
 
 
 def marine_axes(ax):
+    """Set up ``ax`` for the marine view: equal aspect, east along the abscissa, north up, grid.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to set up.
+    """
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("y (east) [L]")
     ax.set_ylabel("x (north) [L]")
@@ -58,7 +150,15 @@ def marine_axes(ax):
 
 
 def plot_maneuver(result, path=None) -> Figure:
-    """Trajectory (marine view) and time histories of heading, rudder and speed of a manoeuvre."""
+    """Trajectory (marine view) and time histories of heading, rudder and speed of a manoeuvre.
+
+    Parameters
+    ----------
+    result : mmg_casadi.maneuvers.ManeuverResult
+        Result of the manoeuvre simulation.
+    path : str or path-like, optional
+        File to save the figure to.
+    """
     fig = Figure(figsize=(11, 5.5), layout="constrained")
     gs = fig.add_gridspec(3, 2, width_ratios=[1.1, 1])
     ax = fig.add_subplot(gs[:, 0])
@@ -147,6 +247,15 @@ def plot_scenario(result, path=None, *, title=None) -> Figure:
     """Paths (:func:`plot_paths`); rudder command vs actual; distance between agents while inside R_safe with
     the collision threshold. ``result`` is a :class:`~mmg_casadi.scenario_run.ScenarioResult`; the figure is
     saved to ``path`` when given.
+
+    Parameters
+    ----------
+    result : mmg_casadi.scenario_run.ScenarioResult
+        Result of the scenario run.
+    path : str or path-like, optional
+        File to save the figure to.
+    title : str, optional
+        Figure title.
     """
     traj, sc = result.trajectory, result.scenario
     N = traj.layout.n_ships
@@ -187,7 +296,15 @@ def plot_scenario(result, path=None, *, title=None) -> Figure:
 
 def plot_tracking(result, path=None) -> Figure:
     """Waypoint tracking: path with R_tol circles, commanded vs actual rudder, desired vs actual heading, and
-    cross-track error over time (the paper's waypoint-tracking figure)."""
+    cross-track error over time (the paper's waypoint-tracking figure).
+
+    Parameters
+    ----------
+    result : mmg_casadi.scenario_run.ScenarioResult
+        Result of the waypoint-tracking run.
+    path : str or path-like, optional
+        File to save the figure to.
+    """
     traj, sc = result.trajectory, result.scenario
     m = traj.sailing_mask()[:, 0]
     ma = m[:-1]

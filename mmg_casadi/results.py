@@ -214,6 +214,11 @@ class ResultsTable:
         Missing columns are written empty; unknown columns raise :class:`InputError`. The header is written
         when the file is new or empty; an incomplete final line from an interrupted write is removed first.
 
+        Parameters
+        ----------
+        rows : iterable of dict
+            Rows keyed by :data:`RUN_COLUMNS`.
+
         Returns
         -------
         int
@@ -316,6 +321,13 @@ def mean_ci(values, z: float = Z_95) -> tuple[float, float, float]:
     ``s`` is the sample standard deviation (ddof=1). With no finite value all three are ``nan``; with one
     the interval is ``nan``.
 
+    Parameters
+    ----------
+    values : array-like of float
+        Sample values; non-finite ones are ignored.
+    z : float, default 1.96
+        Normal quantile of the interval (1.96 for 95 %).
+
     Examples
     --------
     >>> [round(x, 4) for x in mean_ci([1.0, 2.0, 3.0, float("nan")])]
@@ -339,6 +351,11 @@ class Summary:
 
     ``rows`` are dicts with the keys :data:`SUMMARY_COLUMNS`, sorted by environment and then by the order
     in which the methods first appear in the results.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Summary rows keyed by :data:`SUMMARY_COLUMNS`.
     """
 
     rows: list
@@ -358,7 +375,13 @@ class Summary:
         return {c: [r[c] for r in self.rows] for c in SUMMARY_COLUMNS}
 
     def to_csv(self, path) -> Path:
-        """Write the summary to a CSV file (``nan`` written empty); returns the path."""
+        """Write the summary to a CSV file (``nan`` written empty); returns the path.
+
+        Parameters
+        ----------
+        path : str or path-like
+            Path of the CSV file to write.
+        """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         with open(path, "w", encoding="utf-8", newline="") as f:

@@ -341,6 +341,11 @@ def parse_envs(text: str) -> tuple[int, ...]:
 
     Returns the environments sorted and without duplicates.
 
+    Parameters
+    ----------
+    text : str
+        Environments as ranges and/or comma-separated numbers.
+
     Examples
     --------
     >>> parse_envs("1-5")

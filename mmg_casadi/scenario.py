@@ -97,6 +97,23 @@ class Settings:
     collide (L); ``goal_tolerance``: goal reached within this distance (L); ``params``: optional field and
     guidance parameter overrides (keys from :data:`PARAM_KEYS`; ``params`` is left out of the hash).
 
+    Parameters
+    ----------
+    method : str
+        Collision-avoidance method, a name in :data:`mmg_casadi.methods.METHODS`.
+    dt : float, optional
+        Guidance step (L/U); the rudder command is held over the step.
+    t_max : float, optional
+        Horizon (L/U).
+    r_safe : float, optional
+        Safe radius inside which other ships and obstacles act (L).
+    collision_distance : float, optional
+        Ship centres closer than this collide (L).
+    goal_tolerance : float, optional
+        A goal is reached within this distance (L).
+    params : dict, optional
+        Field and guidance parameter overrides (keys from :data:`PARAM_KEYS`).
+
     Examples
     --------
     >>> Settings("none").dt, Settings("none").params
@@ -117,6 +134,13 @@ class Settings:
     def resolved(self, overrides: dict | None = None, *, cls=ParameterError) -> dict:
         """The full parameter set of this scenario: table defaults, these settings, then ``overrides``.
 
+        Parameters
+        ----------
+        overrides : dict or None, optional
+            Parameter values (table names) applied last.
+        cls : type, default ParameterError
+            Exception class raised for an invalid value.
+
         Examples
         --------
         >>> Settings("none", r_safe=10.0).resolved({"kp": 2.0})["r_safe"]
@@ -132,6 +156,23 @@ class ShipSpec:
     ``speed`` as a fraction of the design speed; ``waypoints`` (L, the last one is the goal); ``method`` an
     optional override of :attr:`Settings.method`; ``stays``: after reaching its goal the ship stays there as an
     obstacle (otherwise it leaves the scenario).
+
+    Parameters
+    ----------
+    name : str
+        Name of the ship.
+    start : tuple of float
+        Start position (x, y) (L).
+    heading_deg : float
+        Initial heading (degrees from x towards y).
+    speed : float
+        Initial speed as a fraction of the design speed.
+    waypoints : sequence of (float, float)
+        Waypoints (L); the last one is the goal.
+    method : str or None, optional
+        Collision-avoidance method of this ship (default: :attr:`Settings.method`).
+    stays : bool, optional
+        Whether the ship stays at its goal as an obstacle after reaching it.
 
     Examples
     --------
@@ -169,6 +210,13 @@ class ShipSpec:
 class ObstacleSpec:
     """A static circular obstacle: centre ``position`` (L) and ``radius`` (L).
 
+    Parameters
+    ----------
+    position : tuple of float
+        Centre (x, y) of the obstacle (L).
+    radius : float, default 0.5
+        Radius of the obstacle (L).
+
     Examples
     --------
     >>> ObstacleSpec([25, 0])
@@ -186,6 +234,11 @@ class ObstacleSpec:
 @dataclass(frozen=True)
 class WallSpec:
     """A channel wall: a polyline of at least two ``points`` (L); each consecutive pair is one segment.
+
+    Parameters
+    ----------
+    points : sequence of (float, float)
+        Vertices of the polyline, at least two (L).
 
     Examples
     --------
@@ -452,6 +505,13 @@ def scenario_from_dict(d: dict, source: str = "<dict>") -> Scenario:
 
     ``source`` (a file name) is stored as the ``source`` attribute of any :class:`ScenarioError` raised.
 
+    Parameters
+    ----------
+    d : dict
+        Scenario data shaped like a scenario file.
+    source : str, default '<dict>'
+        Name of the source (a file name) stored in any :class:`ScenarioError` raised.
+
     Examples
     --------
     >>> d = {"settings": {"method": "none"},
@@ -516,6 +576,13 @@ def load_scenario(path) -> Scenario:
 def with_method(s: Scenario, method: str) -> Scenario:
     """``s`` with ``settings.method`` replaced (per-ship overrides are kept).
 
+    Parameters
+    ----------
+    s : Scenario
+        The scenario.
+    method : str
+        Name of the new scenario-wide method.
+
     Examples
     --------
     >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
@@ -528,6 +595,13 @@ def with_method(s: Scenario, method: str) -> Scenario:
 
 def with_params(s: Scenario, params: dict | None) -> Scenario:
     """``s`` with parameter values written into its settings (so the scenario file carries them).
+
+    Parameters
+    ----------
+    s : Scenario
+        The scenario.
+    params : dict or None
+        Parameter values (table names) to write into the settings; ``None`` or empty returns ``s``.
 
     Examples
     --------
@@ -556,6 +630,11 @@ def _ship_dict(ship: ShipSpec) -> dict:
 
 def scenario_to_dict(s: Scenario) -> dict:
     """``s`` as a dict shaped like a scenario file (the inverse of :func:`scenario_from_dict`).
+
+    Parameters
+    ----------
+    s : Scenario
+        The scenario to convert.
 
     Examples
     --------
@@ -632,6 +711,11 @@ def dump_scenario(s: Scenario) -> str:
     """``s`` as scenario-file TOML text; ``scenario_from_dict(tomllib.loads(dump_scenario(s))) == s``.
 
     Empty ``obstacles`` and ``walls`` are left out.
+
+    Parameters
+    ----------
+    s : Scenario
+        The scenario to write.
 
     Examples
     --------

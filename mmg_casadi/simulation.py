@@ -21,13 +21,25 @@ from .compiled import compile_function
 
 @lru_cache(maxsize=64)
 def compiled_step(layout: Layout) -> ca.Function:
-    """Natively compiled closed-loop step for ``layout`` (memoised in-process, cached on disk)."""
+    """Natively compiled closed-loop step for ``layout`` (memoised in-process, cached on disk).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the Function.
+    """
     return compile_function(build_closed_loop_step(layout))
 
 
 @lru_cache(maxsize=64)
 def compiled_guidance(layout: Layout) -> ca.Function:
-    """Natively compiled guidance-only Function for ``layout`` (for timing guidance calls)."""
+    """Natively compiled guidance-only Function for ``layout`` (for timing guidance calls).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the Function.
+    """
     return compile_function(build_guidance(layout))
 
 

@@ -60,6 +60,15 @@ class VelocityObstacleParams:
     ``n_candidates``: number of candidate headings evenly spread around the circle (integer ≥ 2);
     ``cone``: ``"huang"`` (half-angle asin(min(1, D/d)), Huang et al. 2018, the default) or ``"wide"``
     (half-angle min(π/2, 2 atan(D/d)), the laboratory's later version).
+
+    Parameters
+    ----------
+    collision_distance : float, default 2.0
+        Combined radius D of the cone (L, > 0).
+    n_candidates : int, default 80
+        Number of candidate headings evenly spread around the circle (≥ 2).
+    cone : str, default 'huang'
+        Cone formula, ``"huang"`` or ``"wide"``.
     """
 
     collision_distance: float = 2.0
@@ -94,6 +103,29 @@ def velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *,
     ``feasible`` (1×n), ``penetration`` (1×n, max_i (α_i − angle_ij) over the neighbours forbidding j, −π when
     none does), ``cost`` (1×n, ``|wrap(θ_j − θ_goal)|`` plus the tie-break term), ``half_angle`` (1×M, α_i) and
     ``goal_heading`` (θ_goal).
+
+    Parameters
+    ----------
+    own_pos : array-like (2,) or casadi.SX
+        Own-ship position (L).
+    own_speed : float or casadi.SX
+        Own-ship speed, the length of every candidate velocity (L per unit time).
+    goal : array-like (2,) or casadi.SX
+        Goal position (L).
+    nb_pos : array-like (2, M) or casadi.SX
+        Neighbour positions, one column per neighbour (L).
+    nb_vel : array-like (2, M) or casadi.SX
+        Neighbour velocities, one column per neighbour (same units as ``own_speed``).
+    active : array-like (M,) or casadi.SX
+        1 for a neighbour that counts, 0 for one that is ignored.
+    collision_distance : float
+        Combined radius D of the cone (L).
+    n_candidates : int
+        Number of candidate headings evenly spread around the circle.
+    cone : str, default 'huang'
+        Cone formula, ``"huang"`` or ``"wide"`` (see :class:`VelocityObstacleParams`).
+    current_heading : float or casadi.SX, optional
+        Current heading (rad); near-ties go to the candidate closest to it (default: starboard of the goal direction).
 
     Examples
     --------
@@ -159,6 +191,29 @@ def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, colli
     (``Function.conditional``) called as a never-inlined node, so it costs nothing otherwise. The whole guidance
     is itself a never-inlined Function per (neighbour count, candidates, cone), so a closed loop of many ships
     generates and compiles its code once.
+
+    Parameters
+    ----------
+    own_pos : array-like (2,) or casadi.SX
+        Own-ship position (L).
+    own_speed : float or casadi.SX
+        Own-ship speed, the length of every candidate velocity (L per unit time).
+    goal : array-like (2,) or casadi.SX
+        Goal position (L).
+    nb_pos : array-like (2, M) or casadi.SX
+        Neighbour positions, one column per neighbour (L).
+    nb_vel : array-like (2, M) or casadi.SX
+        Neighbour velocities, one column per neighbour (same units as ``own_speed``).
+    active : array-like (M,) or casadi.SX
+        1 for a neighbour that counts, 0 for one that is ignored.
+    collision_distance : float
+        Combined radius D of the cone (L).
+    n_candidates : int
+        Number of candidate headings evenly spread around the circle.
+    cone : str, default 'huang'
+        Cone formula, ``"huang"`` or ``"wide"`` (see :class:`VelocityObstacleParams`).
+    current_heading : float or casadi.SX, optional
+        Current heading (rad); near-ties go to the candidate closest to it (default: starboard of the goal direction).
 
     Examples
     --------
