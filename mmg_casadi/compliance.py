@@ -22,28 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import colregs
-
-
-def sailing_mask(status) -> np.ndarray:
-    """``(K, N)`` True while a ship sails (status 0), and at the sample at which it stopped.
-
-    Parameters
-    ----------
-    status : array (K, N)
-        Status history (0 sailing, 1 reached, 2 diverged).
-
-    Examples
-    --------
-    >>> sailing_mask(np.array([[0, 0], [0, 1], [1, 1]])).astype(int).tolist()
-    [[1, 1], [1, 1], [1, 0]]
-    """
-    status = np.asarray(status)
-    mask = status == 0
-    first_stop = np.argmax(~mask, axis=0)
-    for i, k in enumerate(first_stop):
-        if not mask[:, i].all():
-            mask[k, i] = True
-    return mask
+from .simulation import sailing_mask
 
 
 def own_ship_compliance(t, states, *, r_safe: float, collision_distance: float,

@@ -86,6 +86,28 @@ def _finished(layout: Layout, x: np.ndarray, t_max) -> np.ndarray:
     return np.all(status != 0, axis=0) | (x[0] >= np.asarray(t_max) - 1e-9)
 
 
+def sailing_mask(status) -> np.ndarray:
+    """``(K, N)`` True while a ship sails (status 0), and at the sample at which it stopped.
+
+    Parameters
+    ----------
+    status : array (K, N)
+        Status history (0 sailing, 1 reached, 2 diverged).
+
+    Examples
+    --------
+    >>> sailing_mask(np.array([[0, 0], [0, 1], [1, 1]])).astype(int).tolist()
+    [[1, 1], [1, 1], [1, 0]]
+    """
+    status = np.asarray(status)
+    mask = status == 0
+    first_stop = np.argmax(~mask, axis=0)
+    for i, k in enumerate(first_stop):
+        if not mask[:, i].all():
+            mask[k, i] = True
+    return mask
+
+
 @dataclass
 class Trajectory:
     """History of one closed-loop rollout.
@@ -139,15 +161,8 @@ class Trajectory:
         return self.states[-1]
 
     def sailing_mask(self) -> np.ndarray:
-        """``(T+1, N)`` True while a ship is still sailing (before the sample at which it stopped)."""
-        st = self.state("status")
-        mask = st == 0
-        # keep the sample at which a ship stopped, so its last position belongs to its voyage
-        first_stop = np.argmax(~mask, axis=0)
-        for i, k in enumerate(first_stop):
-            if not mask[:, i].all():
-                mask[k, i] = True
-        return mask
+        """``(T+1, N)`` True while a ship is still sailing (:func:`sailing_mask` of its status history)."""
+        return sailing_mask(self.state("status"))
 
     def to_npz(self, path) -> None:
         """Save times, states and auxiliary signals (with their names) as a compressed ``.npz``.
