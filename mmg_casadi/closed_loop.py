@@ -25,6 +25,7 @@ is checked on the velocities through the water.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -278,7 +279,8 @@ def _indicator(cond_margin, smooth):
 
 
 def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
-                           steering: SteeringParams | None = None, *, n_sub: int = 1) -> ca.Function:
+                           steering: SteeringParams | None = None, *, n_sub: int = 1,
+                           sparse: bool = False) -> ca.Function:
     """Named Function ``closed_loop_<key>(x, p) -> (x_next, aux)`` for one guidance step of the whole scenario.
 
     ``aux`` (NAUX x N) holds per ship the commanded rudder, desired heading, cross-track error and whether the
@@ -294,141 +296,194 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
         Steering-gear parameters (default: :func:`~mmg_casadi.ship.load_steering`).
     n_sub : int, default 1
         Number of RK4 sub-steps per guidance step.
+    sparse : bool, default False
+        Evaluate only what a step needs (for rollouts; exact layouts only): a ship that is not sailing skips its
+        guidance and its integration (its state is held, as in the dense step, and its ``aux`` column is NaN),
+        and a method sees only its neighbours within R_safe, gathered in order (the other neighbours are masked
+        out by ``active`` and add exact zeros in the dense step). Same ``x_next`` as the dense step; the dense
+        step (a single SX expression) is the one to differentiate.
+
+    Examples
+    --------
+    >>> lay = Layout(("modified-vortex",) * 3, n_obstacles=1)
+    >>> build_closed_loop_step(lay).name(), build_closed_loop_step(lay, sparse=True).name()
+    ('closed_loop_modifiedvortexx3_o1_w0_k2_v80huangh', 'closed_loop_modifiedvortexx3_o1_w0_k2_v80huangh')
     """
     ship = ship or load_kcs()
     steering = steering or load_steering()
+    if sparse:
+        _check_sparse(layout)
+        return _sparse_functions(layout, ship, steering, n_sub)[0]
     mmg = build_mmg(ship, steering, disturbed=layout.disturbed)
-    N, S, W = layout.n_ships, layout.n_obstacles, layout.n_walls
-    sm = layout.smooth
     x = ca.SX.sym("x", layout.nx)
     p = ca.SX.sym("p", layout.np)
+    c = _step_context(layout, x, p)
+    x_next, aux = [], []
+    for i in range(layout.n_ships):
+        new, aux_i = _ship_update(layout, i, c, mmg, n_sub)
+        x_next.append(ca.if_else(c["sailing"][i], new, c["X"][i]))
+        aux.append(aux_i)
+    x_new = _bookkeeping(layout, c, x_next)
+    # common-subexpression elimination: the same operations without repeats, so results are bit-identical
+    return ca.Function(f"closed_loop_{layout.key()}", [x, p], [x_new, ca.horzcat(*aux)], ["x", "p"],
+                       ["x_next", "aux"], {"cse": True})
+
+
+def _step_context(layout: Layout, x, p, shared=None) -> dict:
+    """Named pieces of a step's inputs: parameters, time, ship states, positions, velocities over the ground,
+    whether each ship sails and is present as an obstacle (from ``shared`` = per ship ``[x, y, v_x, v_y,
+    present]`` when given, as the sparse step passes them)."""
+    N = layout.n_ships
     P = layout.split_params(p)
     t = x[0]
-    dt = P["dt"]
     X = [x[1 + i * NS: 1 + (i + 1) * NS] for i in range(N)]
-
-    pos = [ca.vertcat(Xi[S_["x"]], Xi[S_["y"]]) for Xi in X]
     psi = [Xi[S_["psi"]] for Xi in X]
-    vel = [ca.vertcat(Xi[S_["u"]] * ca.cos(Xi[S_["psi"]]) - Xi[S_["v"]] * ca.sin(Xi[S_["psi"]]),
-                      Xi[S_["u"]] * ca.sin(Xi[S_["psi"]]) + Xi[S_["v"]] * ca.cos(Xi[S_["psi"]])) for Xi in X]
-    env_args = ()
+    E, env_args = None, ()
+    if shared is None:
+        pos = [ca.vertcat(Xi[S_["x"]], Xi[S_["y"]]) for Xi in X]
+        vel = [ca.vertcat(Xi[S_["u"]] * ca.cos(Xi[S_["psi"]]) - Xi[S_["v"]] * ca.sin(Xi[S_["psi"]]),
+                          Xi[S_["u"]] * ca.sin(Xi[S_["psi"]]) + Xi[S_["v"]] * ca.cos(Xi[S_["psi"]])) for Xi in X]
+    else:
+        pos = [shared[5 * i: 5 * i + 2] for i in range(N)]
+        vel = [shared[5 * i + 2: 5 * i + 4] for i in range(N)]
     if layout.disturbed:  # u, v are through the water; guidance sees velocities over the ground
         E = P["env"]
         env_args = (E[0:4],)
-        vel = [ca.vertcat(*environment.velocity_over_ground(Xi[S_["u"]], Xi[S_["v"]], Xi[S_["psi"]], E[0], E[1]))
-               for Xi in X]
+        if shared is None:
+            vel = [ca.vertcat(*environment.velocity_over_ground(Xi[S_["u"]], Xi[S_["v"]], Xi[S_["psi"]], E[0], E[1]))
+                   for Xi in X]
     running = t < P["t_max"] - 1e-9
     sailing = [ca.logic_and(Xi[S_["status"]] == 0, running) for Xi in X]
-    # A ship is present as an obstacle while sailing, or after its goal if it stays; a diverged ship is removed.
-    present = [ca.if_else(Xi[S_["status"]] == 0, 1, ca.if_else(Xi[S_["status"]] == 1, P["ships"][i]["stays"], 0))
-               for i, Xi in enumerate(X)]
+    if shared is None:
+        # A ship is present as an obstacle while sailing, or after its goal if it stays; a diverged ship is removed.
+        present = [ca.if_else(Xi[S_["status"]] == 0, 1,
+                              ca.if_else(Xi[S_["status"]] == 1, P["ships"][i]["stays"], 0))
+                   for i, Xi in enumerate(X)]
+    else:
+        present = [shared[5 * i + 4] for i in range(N)]
+    return {"P": P, "t": t, "X": X, "pos": pos, "psi": psi, "vel": vel, "E": E, "env_args": env_args,
+            "running": running, "sailing": sailing, "present": present}
+
+
+def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bool = False):
+    """Ship ``i``'s state after the step while it sails (``NS`` rows; the caller holds a ship that does not)
+    and its ``aux`` column."""
+    N, S, W = layout.n_ships, layout.n_obstacles, layout.n_walls
+    sm = layout.smooth
+    P, t, X, pos, psi, vel, E = c["P"], c["t"], c["X"], c["pos"], c["psi"], c["vel"], c["E"]
+    present = c["present"]
+    dt = P["dt"]
     obs = P["obstacles"]
     walls = P["walls"]
+    Xi = X[i]
+    Pi = P["ships"][i]
+    method = layout.methods[i]
+    terms = ilos_step_terms(pos[i], Pi["path"], Xi[S_["idx"]], Xi[S_["y_int"]], P["ilos_delta"], P["ilos_k"])
+    goal = terms["wp_next"]
+    others = [j for j in range(N) if j != i]
+    nb_pos = ca.horzcat(*[pos[j] for j in others], obs[0:2, :]) if (others or S) else ca.SX(2, 0)
+    nb_vel = ca.horzcat(*[vel[j] for j in others], ca.SX.zeros(2, S)) if (others or S) else ca.SX(2, 0)
+    nb_rad = ca.horzcat(*[P["ship_radius"] for _ in others], obs[2:3, :]) if (others or S) else ca.SX(1, 0)
+    nb_present = ca.horzcat(*[present[j] for j in others], ca.SX.ones(1, S)) if (others or S) else ca.SX(1, 0)
+    M = len(others) + S
+    if M:
+        d_nb = ca.sqrt(ca.sum1((nb_pos - ca.repmat(pos[i], 1, M)) ** 2))
+        active = nb_present * _indicator(P["r_safe"] - d_nb, sm)
+    else:
+        active = ca.SX(1, 0)
 
-    x_next, aux = [], []
-    for i in range(N):
-        Xi = X[i]
-        Pi = P["ships"][i]
-        method = layout.methods[i]
-        terms = ilos_step_terms(pos[i], Pi["path"], Xi[S_["idx"]], Xi[S_["y_int"]], P["ilos_delta"], P["ilos_k"])
-        goal = terms["wp_next"]
-        others = [j for j in range(N) if j != i]
-        nb_pos = ca.horzcat(*[pos[j] for j in others], obs[0:2, :]) if (others or S) else ca.SX(2, 0)
-        nb_vel = ca.horzcat(*[vel[j] for j in others], ca.SX.zeros(2, S)) if (others or S) else ca.SX(2, 0)
-        nb_rad = ca.horzcat(*[P["ship_radius"] for _ in others], obs[2:3, :]) if (others or S) else ca.SX(1, 0)
-        nb_present = ca.horzcat(*[present[j] for j in others], ca.SX.ones(1, S)) if (others or S) else ca.SX(1, 0)
-        M = len(others) + S
+    psi_ilos = terms["psi_d"]
+    spec = methods.get(method, f"methods[{i}]")
+    if spec.goal_capture:
+        # past its final waypoint (missed outside the acceptance radius) the ship turns back to it instead of
+        # following the extended last leg for ever
+        past = ca.logic_and(Xi[S_["idx"]] > Pi["n_path"] - 1.5,
+                            terms["x_e"] > ca.norm_2(terms["wp_next"] - terms["wp_prev"]))
+        to_goal = terms["wp_next"] - pos[i]
+        psi_ilos = ca.if_else(past, ca.atan2(to_goal[1], to_goal[0]), psi_ilos)
+    if layout.disturbed:  # optional crab-angle compensation: steer the course, psi_d = chi_d - beta
+        u_g, v_g = environment.ground_velocity(Xi[S_["u"]], Xi[S_["v"]], psi[i], E[0], E[1])
+        psi_ilos = psi_ilos - E[4] * environment.crab_angle(u_g, v_g)
+    chosen = None  # heading chosen by the method while a neighbour is within R_safe
+    if spec.builder is None or (M == 0 and W == 0):
+        psi_d = psi_ilos
+        w_react = ca.SX(0)
+    else:
         if M:
-            d_nb = ca.sqrt(ca.sum1((nb_pos - ca.repmat(pos[i], 1, M)) ** 2))
-            active = nb_present * _indicator(P["r_safe"] - d_nb, sm)
+            any_active = 1 - ca.exp(ca.sum2(ca.log(ca.fmax(1 - active, 1e-300)))) if sm is not None \
+                else ca.sum2(active) > 0
         else:
-            active = ca.SX(1, 0)
-
-        psi_ilos = terms["psi_d"]
-        if methods.get(method, f"methods[{i}]").goal_capture:
-            # past its final waypoint (missed outside the acceptance radius) the ship turns back to it instead of
-            # following the extended last leg for ever
-            past = ca.logic_and(Xi[S_["idx"]] > Pi["n_path"] - 1.5,
-                                terms["x_e"] > ca.norm_2(terms["wp_next"] - terms["wp_prev"]))
-            to_goal = terms["wp_next"] - pos[i]
-            psi_ilos = ca.if_else(past, ca.atan2(to_goal[1], to_goal[0]), psi_ilos)
-        if layout.disturbed:  # optional crab-angle compensation: steer the course, psi_d = chi_d - beta
-            u_g, v_g = environment.ground_velocity(Xi[S_["u"]], Xi[S_["v"]], psi[i], E[0], E[1])
-            psi_ilos = psi_ilos - E[4] * environment.crab_angle(u_g, v_g)
-        spec = methods.get(method, f"methods[{i}]")
-        chosen = None  # heading chosen by the method while a neighbour is within R_safe
-        if spec.builder is None or (M == 0 and W == 0):
-            psi_d = psi_ilos
-            w_react = ca.SX(0)
+            any_active = ca.SX(0)
+        wall_vec = ca.SX.zeros(2, 1)
+        near_wall = ca.SX(0)
+        if W:
+            wall_vec = fields.channel_walls(pos[i], walls[0:2, :], walls[2:4, :], lam=P["wall_lam"],
+                                            d_act=P["wall_d_act"])
+            near_wall = _indicator(ca.sumsqr(wall_vec) - 1e-12, sm)
+        w_react = ca.fmax(any_active, near_wall) if sm is None else 1 - (1 - any_active) * (1 - near_wall)
+        speed = ca.norm_2(vel[i]) if layout.disturbed else ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2)
+        inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal,
+                                nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=active, P=P,
+                                layout=layout, held_heading=Xi[S_["vo_heading"]])
+        method_vec = _within_range(layout, method, M)(ca.sum2(active), *_dispatch_args(layout, inputs)) \
+            if sparse and M > 1 else spec.builder(inputs)
+        if M:
+            chosen = (any_active > 0.5, ca.atan2(method_vec[1], method_vec[0]))
+        field_vec = method_vec + wall_vec
+        if sm is None:
+            psi_d = ca.if_else(w_react, ca.atan2(field_vec[1], field_vec[0]), psi_ilos)
         else:
-            if M:
-                any_active = 1 - ca.exp(ca.sum2(ca.log(ca.fmax(1 - active, 1e-300)))) if sm is not None \
-                    else ca.sum2(active) > 0
-            else:
-                any_active = ca.SX(0)
-            wall_vec = ca.SX.zeros(2, 1)
-            near_wall = ca.SX(0)
-            if W:
-                wall_vec = fields.channel_walls(pos[i], walls[0:2, :], walls[2:4, :], lam=P["wall_lam"],
-                                                d_act=P["wall_d_act"])
-                near_wall = _indicator(ca.sumsqr(wall_vec) - 1e-12, sm)
-            w_react = ca.fmax(any_active, near_wall) if sm is None else 1 - (1 - any_active) * (1 - near_wall)
-            speed = ca.norm_2(vel[i]) if layout.disturbed else ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2)
-            inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal,
-                                    nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=active, P=P,
-                                    layout=layout, held_heading=Xi[S_["vo_heading"]])
-            method_vec = spec.builder(inputs)
-            if M:
-                chosen = (any_active > 0.5, ca.atan2(method_vec[1], method_vec[0]))
-            field_vec = method_vec + wall_vec
-            if sm is None:
-                psi_d = ca.if_else(w_react, ca.atan2(field_vec[1], field_vec[0]), psi_ilos)
-            else:
-                e_f = field_vec / ca.sqrt(ca.sumsqr(field_vec) + 1e-12)
-                e = w_react * e_f + (1 - w_react) * ca.vertcat(ca.cos(psi_ilos), ca.sin(psi_ilos))
-                psi_d = ca.atan2(e[1], e[0])
+            e_f = field_vec / ca.sqrt(ca.sumsqr(field_vec) + 1e-12)
+            e = w_react * e_f + (1 - w_react) * ca.vertcat(ca.cos(psi_ilos), ca.sin(psi_ilos))
+            psi_d = ca.atan2(e[1], e[0])
 
-        delta_c = pd_heading(psi[i], psi_d, Xi[S_["r"]], P["kp"], P["kd"], P["delta_max"])
-        xm = Xi[:NX]
-        xm_next = rk4(mmg, xm, (delta_c, Pi["n_rpm"], *env_args), dt / n_sub)
-        for _ in range(n_sub - 1):
-            xm_next = rk4(mmg, xm_next, (delta_c, Pi["n_rpm"], *env_args), dt / n_sub)
-        y_int_next = Xi[S_["y_int"]] + dt * terms["y_int_dot"] * (1 - w_react)
-        pos_next = xm_next[3:5]
-        idx_next, reached = switch_waypoint(pos_next, Pi["path"], Xi[S_["idx"]], Pi["n_path"], P["goal_tolerance"])
-        t_next = t + dt
+    delta_c = pd_heading(psi[i], psi_d, Xi[S_["r"]], P["kp"], P["kd"], P["delta_max"])
+    xm = Xi[:NX]
+    xm_next = rk4(mmg, xm, (delta_c, Pi["n_rpm"], *c["env_args"]), dt / n_sub)
+    for _ in range(n_sub - 1):
+        xm_next = rk4(mmg, xm_next, (delta_c, Pi["n_rpm"], *c["env_args"]), dt / n_sub)
+    y_int_next = Xi[S_["y_int"]] + dt * terms["y_int_dot"] * (1 - w_react)
+    pos_next = xm_next[3:5]
+    idx_next, reached = switch_waypoint(pos_next, Pi["path"], Xi[S_["idx"]], Pi["n_path"], P["goal_tolerance"])
+    t_next = t + dt
 
-        finite = ca.logic_and(ca.logic_and(ca.fabs(xm_next[0]) < ENVELOPE["speed"],
-                                           ca.fabs(xm_next[1]) < ENVELOPE["speed"]),
-                              ca.logic_and(ca.fabs(xm_next[2]) < ENVELOPE["r"],
-                                           ca.fabs(xm_next[3]) + ca.fabs(xm_next[4]) < ENVELOPE["position"]))
-        status_new = ca.if_else(finite, ca.if_else(reached, 1, 0), 2)
-        abs_d = 0.5 * (ca.fabs(Xi[S_["delta"]]) + ca.fabs(xm_next[6]))
+    finite = ca.logic_and(ca.logic_and(ca.fabs(xm_next[0]) < ENVELOPE["speed"],
+                                       ca.fabs(xm_next[1]) < ENVELOPE["speed"]),
+                          ca.logic_and(ca.fabs(xm_next[2]) < ENVELOPE["r"],
+                                       ca.fabs(xm_next[3]) + ca.fabs(xm_next[4]) < ENVELOPE["position"]))
+    status_new = ca.if_else(finite, ca.if_else(reached, 1, 0), 2)
+    abs_d = 0.5 * (ca.fabs(Xi[S_["delta"]]) + ca.fabs(xm_next[6]))
 
-        final_goal = Pi["path"][:, -1]
-        gdist = ca.norm_2(pos_next - final_goal)
-        better = gdist < Xi[S_["best_goal_dist"]] - 1e-9
+    final_goal = Pi["path"][:, -1]
+    gdist = ca.norm_2(pos_next - final_goal)
+    better = gdist < Xi[S_["best_goal_dist"]] - 1e-9
 
-        new = ca.vertcat(
-            xm_next,
-            y_int_next,
-            idx_next,
-            status_new,
-            ca.if_else(status_new == 1, t_next, -1),
-            Xi[S_["ce_int"]] + abs_d * dt,
-            Xi[S_["mcte_int"]] + ca.fabs(terms["y_e"]) * dt,
-            Xi[S_["d_min"]], Xi[S_["d_min_with"]], Xi[S_["t_collision"]], Xi[S_["collision_with"]],
-            ca.if_else(better, gdist, Xi[S_["best_goal_dist"]]),
-            ca.if_else(better, t_next, Xi[S_["t_best"]]),
-            ca.if_else(better, pos_next[0], Xi[S_["x_best"]]),
-            ca.if_else(better, pos_next[1], Xi[S_["y_best"]]),
-            Xi[S_["reactive_time"]] + w_react * dt,
-            xm_next[5] if chosen is None else ca.if_else(chosen[0], chosen[1], xm_next[5]),
-        )
-        x_next.append(ca.if_else(sailing[i], new, Xi))
-        aux.append(ca.vertcat(delta_c, psi_d, terms["y_e"], w_react))
+    new = ca.vertcat(
+        xm_next,
+        y_int_next,
+        idx_next,
+        status_new,
+        ca.if_else(status_new == 1, t_next, -1),
+        Xi[S_["ce_int"]] + abs_d * dt,
+        Xi[S_["mcte_int"]] + ca.fabs(terms["y_e"]) * dt,
+        Xi[S_["d_min"]], Xi[S_["d_min_with"]], Xi[S_["t_collision"]], Xi[S_["collision_with"]],
+        ca.if_else(better, gdist, Xi[S_["best_goal_dist"]]),
+        ca.if_else(better, t_next, Xi[S_["t_best"]]),
+        ca.if_else(better, pos_next[0], Xi[S_["x_best"]]),
+        ca.if_else(better, pos_next[1], Xi[S_["y_best"]]),
+        Xi[S_["reactive_time"]] + w_react * dt,
+        xm_next[5] if chosen is None else ca.if_else(chosen[0], chosen[1], xm_next[5]),
+    )
+    return new, ca.vertcat(delta_c, psi_d, terms["y_e"], w_react)
 
-    # Closest approach and first collision, from the positions after the step, for every pair present at its start.
+
+def _bookkeeping(layout: Layout, c: dict, x_next: list):
+    """The next scenario state: closest approach and first collision, from the positions after the step, for
+    every pair present at its start, and the clock."""
+    N, S = layout.n_ships, layout.n_obstacles
+    P, t, present, running = c["P"], c["t"], c["present"], c["running"]
+    dt = P["dt"]
+    obs = P["obstacles"]
     pos_n = [xn[3:5] for xn in x_next]
     out = []
     for i in range(N):
@@ -449,17 +504,129 @@ def build_closed_loop_step(layout: Layout, ship: ShipParams | None = None,
             c_with = ca.if_else(hit, j, c_with)
         xn = ca.vertcat(xn[:S_["d_min"]], d_min, d_with, t_col, c_with, xn[S_["collision_with"] + 1:])
         out.append(xn)
+    return ca.vertcat(ca.if_else(running, t + dt, t), *out)
 
-    x_new = ca.vertcat(ca.if_else(running, t + dt, t), *out)
-    aux_m = ca.horzcat(*aux)
-    # common-subexpression elimination: the same operations without repeats, so results are bit-identical
-    return ca.Function(f"closed_loop_{layout.key()}", [x, p], [x_new, aux_m], ["x", "p"], ["x_next", "aux"],
-                       {"cse": True})
+
+@functools.lru_cache(maxsize=16)
+def _sparse_functions(layout: Layout, ship: ShipParams, steering: SteeringParams,
+                      n_sub: int) -> tuple[ca.Function, ca.Function]:
+    """The steps of :func:`build_closed_loop_step` and :func:`build_guidance` with ``sparse=True``.
+
+    A prelude computes every ship's position, velocity over the ground, presence and sailing flag; per ship a
+    conditional (``Function.conditional``) either holds the ship or runs :func:`_ship_update`; the bookkeeping
+    follows. They are generated as calls, so a branch not taken costs nothing. The guidance Function runs the
+    same per-ship pieces up to the rudder command."""
+    mmg = build_mmg(ship, steering, disturbed=layout.disturbed)
+    N, key = layout.n_ships, layout.key()
+    xs, ps = ca.SX.sym("x", layout.nx), ca.SX.sym("p", layout.np)
+    c = _step_context(layout, xs, ps)
+    shared = ca.vertcat(*[ca.vertcat(c["pos"][i], c["vel"][i], c["present"][i]) for i in range(N)])
+    pre = ca.Function(f"pre_{key}", [xs, ps], [shared, ca.vertcat(*c["sailing"])], {"cse": True})
+    sh = ca.SX.sym("shared", 5 * N)
+    cs = _step_context(layout, xs, ps, shared=sh)
+    nxt = ca.SX.sym("next", N * NS)
+    post = ca.Function(f"post_{key}", [xs, ps, nxt],
+                       [_bookkeeping(layout, c, [nxt[i * NS:(i + 1) * NS] for i in range(N)])], {"cse": True})
+    x, p = ca.MX.sym("x", layout.nx), ca.MX.sym("p", layout.np)
+    sh_mx, sailing = pre(x, p)
+    news, auxs, rudders = [], [], []
+    for i in range(N):
+        new, aux_i = _ship_update(layout, i, cs, mmg, n_sub, sparse=True)
+        run = ca.Function(f"sail{i}_{key}", [xs, ps, sh], [new, aux_i], {"cse": True})
+        hold = ca.Function(f"hold{i}_{key}", [xs, ps, sh], [cs["X"][i], ca.DM.nan(NAUX, 1)])
+        new_mx, aux_mx = ca.Function.conditional(f"ship{i}_{key}", [hold], run)(sailing[i], x, p, sh_mx)
+        news.append(new_mx)
+        auxs.append(aux_mx)
+        steer = ca.Function(f"steer{i}_{key}", [xs, ps, sh], [aux_i[0]], {"cse": True})
+        idle = ca.Function(f"idle{i}_{key}", [xs, ps, sh], [ca.DM.nan(1, 1)])
+        rudders.append(ca.Function.conditional(f"rudder{i}_{key}", [idle], steer)(sailing[i], x, p, sh_mx))
+    step = ca.Function(f"closed_loop_{key}", [x, p], [post(x, p, ca.vertcat(*news)), ca.horzcat(*auxs)],
+                       ["x", "p"], ["x_next", "aux"])
+    guidance = ca.Function(f"guidance_{key}", [x, p], [ca.horzcat(*rudders)], ["x", "p"], ["delta_c"])
+    return step, guidance
+
+
+_SLOTS = (1, 2, 4)
+"""Neighbour counts for which :func:`_within_range` has a gathered branch (more active ones: all M)."""
+
+
+def _method_scalars(layout: Layout) -> tuple[str, ...]:
+    return GLOBAL_PARAMS + layout.method_inputs
+
+
+def _dispatch_args(layout: Layout, g: GuidanceInputs) -> list:
+    return [g.pos, g.vel, g.psi, g.speed, g.goal, g.nb_pos, g.nb_vel, g.nb_radius, g.active, g.held_heading,
+            ca.vertcat(*[g.P[k] for k in _method_scalars(layout)])]
+
+
+_DISPATCH: dict = {}
+
+
+def _within_range(layout: Layout, method: str, m: int) -> ca.Function:
+    """Never-inlined Function ``(k, pos, vel, psi, speed, goal, nb_pos, nb_vel, nb_radius, active, held, P)``
+    → the method's 2×1 vector, evaluating the method on the ``k`` active neighbours only (gathered in their
+    order into 1, 2 or 4 slots, the unused slots inactive) or on all ``m`` when more are active; with none
+    active and no walls it returns (1, 0) without evaluating the method (the step does not read it). Exact only
+    because every method ignores an inactive neighbour (a masked term adds an exact zero; a test checks each
+    registered method)."""
+    key = (layout, method, m)
+    if key in _DISPATCH:
+        return _DISPATCH[key]
+    spec = methods.get(method)
+    names = _method_scalars(layout)
+    sym = [ca.SX.sym("pos", 2), ca.SX.sym("vel", 2), ca.SX.sym("psi"), ca.SX.sym("speed"), ca.SX.sym("goal", 2),
+           ca.SX.sym("nb_pos", 2, m), ca.SX.sym("nb_vel", 2, m), ca.SX.sym("nb_radius", 1, m),
+           ca.SX.sym("active", 1, m), ca.SX.sym("held"), ca.SX.sym("P", len(names))]
+    pos, vel, psi, speed, goal, nb_pos, nb_vel, nb_rad, active, held, pv = sym
+    P = {k: pv[n] for n, k in enumerate(names)}
+
+    def branch(slots):
+        if slots >= m:
+            g_pos, g_vel, g_rad, g_act = nb_pos, nb_vel, nb_rad, active
+        else:
+            cols = [[ca.SX.zeros(2, 1), ca.SX.zeros(2, 1), ca.SX(0), ca.SX(0)] for _ in range(slots)]
+            before = ca.SX(0)  # active neighbours before column j
+            for j in range(m):
+                for q in range(slots):
+                    take = ca.logic_and(active[j] == 1, before == q)
+                    src = (nb_pos[:, j], nb_vel[:, j], nb_rad[j], active[j])
+                    cols[q] = [ca.if_else(take, s_, d_) for s_, d_ in zip(src, cols[q])]
+                before = before + active[j]
+            g_pos = ca.horzcat(*[cq[0] for cq in cols])
+            g_vel = ca.horzcat(*[cq[1] for cq in cols])
+            g_rad = ca.horzcat(*[cq[2] for cq in cols])
+            g_act = ca.horzcat(*[cq[3] for cq in cols])
+        g = GuidanceInputs(pos=pos, vel=vel, psi=psi, speed=speed, goal=goal, nb_pos=g_pos, nb_vel=g_vel,
+                           nb_radius=g_rad, active=g_act, P=P, layout=layout, held_heading=held)
+        return ca.Function(f"{method.replace('-', '')}_{layout.key()}_m{m}_s{min(slots, m)}", sym,
+                           [spec.builder(g)], {"cse": True})
+
+    sizes = [s for s in _SLOTS if s < m]
+    by_size = {s: branch(s) for s in sizes}
+    cases = [by_size[min(s for s in sizes if s >= max(k, 1))] for k in range(max(sizes) + 1)]
+    if layout.n_walls == 0:
+        # nothing within R_safe and no walls: the step follows ILOS and never reads the method's vector
+        cases[0] = ca.Function(f"{method.replace('-', '')}_{layout.key()}_m{m}_idle", sym, [ca.DM([1.0, 0.0])])
+    cond = ca.Function.conditional(f"within_{method.replace('-', '')}_{layout.key()}_m{m}", cases, branch(m))
+    xm = [ca.MX.sym(f"a{n}", *cond.size_in(n)) for n in range(cond.n_in())]
+    f = ca.Function(f"within_range_{method.replace('-', '')}_{layout.key()}_m{m}", xm, [cond(*xm)],
+                    {"never_inline": True})
+    _DISPATCH[key] = f
+    return f
+
+
+def _check_sparse(layout: Layout) -> None:
+    if layout.smooth is not None:
+        raise ParameterError("sparse", "False for a smooth layout (the smoothed step is the one differentiated)",
+                             True)
 
 
 def build_guidance(layout: Layout, ship: ShipParams | None = None,
-                   steering: SteeringParams | None = None) -> ca.Function:
+                   steering: SteeringParams | None = None, *, sparse: bool = False) -> ca.Function:
     """Guidance-and-control part only: ``guidance_<key>(x, p) -> delta_c (1 x N)``, for timing the methods.
+
+    With ``sparse`` (see :func:`build_closed_loop_step`) a ship that is not sailing gets NaN without any
+    computation and a method sees only its neighbours within R_safe: the cost of the guidance the rollouts run.
 
     Parameters
     ----------
@@ -469,7 +636,12 @@ def build_guidance(layout: Layout, ship: ShipParams | None = None,
         Hull and propulsion parameters (default: the KCS, :func:`~mmg_casadi.ship.load_kcs`).
     steering : mmg_casadi.ship.SteeringParams, optional
         Steering-gear parameters (default: :func:`~mmg_casadi.ship.load_steering`).
+    sparse : bool, default False
+        The guidance of the sparse step (exact layouts only).
     """
+    if sparse:
+        _check_sparse(layout)
+        return _sparse_functions(layout, ship or load_kcs(), steering or load_steering(), 1)[1]
     step = build_closed_loop_step(layout, ship, steering)
     x = ca.SX.sym("x", layout.nx)
     p = ca.SX.sym("p", layout.np)

@@ -83,7 +83,7 @@ import casadi as ca
 import numpy as np
 
 from . import methods as method_registry
-from .closed_loop import ClosedLoopModel, Layout, build_problem
+from .closed_loop import NS, S_, ClosedLoopModel, Layout, build_problem
 from .disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
 from .errors import InputError
 from .io import write_json
@@ -245,7 +245,10 @@ def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: flo
 
     The compiled guidance Function (:func:`~mmg_casadi.simulation.compiled_guidance`) is mapped over the
     columns (tiled to at least :data:`MIN_TIMING_COLUMNS`), called once to warm up and then repeatedly for
-    about ``min_time`` seconds; the result is ``elapsed / (repeats * columns * N)``.
+    about ``min_time`` seconds; the result is ``elapsed / (repeats * columns * N)``. Every ship is timed as
+    sailing (status 0, clock 0) in the positions of ``X``: the rollouts skip the guidance of a ship that no
+    longer sails, and a method sees only the neighbours within R_safe, so the time is that of the guidance
+    the rollouts run for ``N`` sailing ships in those configurations.
 
     Parameters
     ----------
@@ -260,8 +263,10 @@ def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: flo
     max_repeats : int, default 50
         Largest number of timed calls.
     """
-    X = np.asarray(X, float)
+    X = np.array(X, float)
     P = np.asarray(P, float)
+    X[0] = 0.0
+    X[[1 + i * NS + S_["status"] for i in range(layout.n_ships)]] = 0.0
     reps = max(1, math.ceil(MIN_TIMING_COLUMNS / X.shape[1]))
     X = np.tile(X, (1, reps))
     P = np.tile(P, (1, reps))
@@ -504,24 +509,22 @@ def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int =
     return tasks
 
 
-def _compile_item(item) -> tuple[str, float]:
-    from .simulation import compiled_guidance, compiled_step
-    layout, kind = item
+def _compile_item(layout) -> float:
+    from .simulation import compiled_step
     t0 = time.perf_counter()
-    (compiled_step if kind == "step" else compiled_guidance)(layout)
-    return kind, time.perf_counter() - t0
+    compiled_step(layout)
+    return time.perf_counter() - t0
 
 
-def _compile_cost(item) -> float:
+def _compile_cost(layout) -> float:
     """A rough order of compile time: ships × neighbours, the velocity obstacle's candidates weigh most."""
-    layout, kind = item
     n = layout.n_ships * (layout.n_agents - 1)
-    n *= 1 + sum(m == "velocity-obstacle" for m in layout.methods) * layout.vo_candidates / 20 / layout.n_ships
-    return n * (1.0 if kind == "step" else 0.6)
+    return n * (1 + sum(m == "velocity-obstacle" for m in layout.methods) * layout.vo_candidates / 20 / layout.n_ships)
 
 
 def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
-    """Compile (or load from the disk cache) the step and guidance Functions of every layout, in this process.
+    """Compile (or load from the disk cache) the library of every layout (its step and guidance Functions,
+    :func:`~mmg_casadi.simulation.rollout_functions`), in this process.
 
     Libraries missing from the cache are first compiled in parallel by up to ``workers`` forked processes, the
     costliest first (the velocity obstacle for 10 ships takes the longest), each one named in ``log`` as it is
@@ -538,16 +541,14 @@ def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
     log : file-like, optional
         Where to report what is compiled.
     """
-    from .closed_loop import build_closed_loop_step, build_guidance
     from .compiled import library_path
-    from .simulation import compiled_guidance, compiled_step
+    from .simulation import compiled_step, rollout_functions
     layouts = list(dict.fromkeys(layouts))
     missing = []
     for lay in layouts:
-        if not library_path(build_closed_loop_step(lay))[0].exists():
-            missing.append((lay, "step"))
-        if not library_path(build_guidance(lay))[0].exists():
-            missing.append((lay, "guidance"))
+        step, guidance = rollout_functions(lay)
+        if not library_path(step, also=[guidance])[0].exists():
+            missing.append(lay)
     if missing:
         missing.sort(key=_compile_cost, reverse=True)
         if log:
@@ -561,16 +562,15 @@ def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
         try:
             futures = {pool.submit(_compile_item, item): item for item in missing}
             for k, fut in enumerate(as_completed(futures), 1):
-                (lay, _), (kind, seconds) = futures[fut], fut.result()
+                lay, seconds = futures[fut], fut.result()
                 if log:
-                    print(f"  [{k}/{len(missing)}] {kind} {lay.key()} ({seconds:.0f} s)", file=log, flush=True)
+                    print(f"  [{k}/{len(missing)}] {lay.key()} ({seconds:.0f} s)", file=log, flush=True)
         except BaseException:
             stop_pool(pool, WORKER_JOIN_TIMEOUT)  # do not wait minutes for compilers on Ctrl-C / SIGTERM
             raise
         pool.shutdown()
     for lay in layouts:
         compiled_step(lay)
-        compiled_guidance(lay)
 
 
 # ----------------------------------------------------------------------------------------------- executors

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import tomllib
 from dataclasses import dataclass, fields
+from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
@@ -246,10 +247,27 @@ class SteeringParams:
 DATA_FILE = "kcs_mmg.toml"
 
 
+@lru_cache(maxsize=1)
+def _packaged_text() -> str:
+    """The packaged data file, read once per process (a study builds thousands of scenarios)."""
+    return resources.files("mmg_casadi").joinpath("data", DATA_FILE).read_text()
+
+
 def _read_toml(path: str | Path | None) -> dict:
-    if path is None:
-        return tomllib.loads(resources.files("mmg_casadi").joinpath("data", DATA_FILE).read_text())
-    return tomllib.loads(Path(path).read_text())
+    return tomllib.loads(_packaged_text() if path is None else Path(path).read_text())
+
+
+@lru_cache(maxsize=1)
+def _packaged_kcs() -> ShipParams:
+    return _ship_from(_read_toml(None))
+
+
+def _ship_from(raw: dict) -> ShipParams:
+    flat: dict = {}
+    for block in ("ship", "mass", "hull", "propeller", "rudder"):
+        flat.update(raw[block])
+    names = {f.name for f in fields(ShipParams)}
+    return ShipParams(**{k: float(v) for k, v in flat.items() if k in names})
 
 
 def load_kcs(path: str | Path | None = None) -> ShipParams:
@@ -266,12 +284,7 @@ def load_kcs(path: str | Path | None = None) -> ShipParams:
     >>> round(kcs.m, 6), round(kcs.Izz, 6)
     (0.18228, 0.011432)
     """
-    raw = _read_toml(path)
-    flat: dict = {}
-    for block in ("ship", "mass", "hull", "propeller", "rudder"):
-        flat.update(raw[block])
-    names = {f.name for f in fields(ShipParams)}
-    return ShipParams(**{k: float(v) for k, v in flat.items() if k in names})
+    return _packaged_kcs() if path is None else _ship_from(_read_toml(path))  # frozen: sharing is safe
 
 
 def load_steering(path: str | Path | None = None) -> SteeringParams:

@@ -19,7 +19,25 @@ from .closed_loop import (AUX, GLOBAL_PARAMS, NS, S_, SHIP_STATE, Layout, build_
 from .compiled import compile_function
 
 
+def rollout_functions(layout: Layout) -> list[ca.Function]:
+    """The closed-loop step and guidance Functions that rollouts of ``layout`` compile into one library: the
+    sparse ones (:func:`~mmg_casadi.closed_loop.build_closed_loop_step`) for an exact layout, else the dense.
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the Functions.
+    """
+    sparse = layout.smooth is None
+    return [build_closed_loop_step(layout, sparse=sparse), build_guidance(layout, sparse=sparse)]
+
+
 @lru_cache(maxsize=64)
+def _library(layout: Layout) -> tuple[ca.Function, ca.Function]:
+    step, guidance = rollout_functions(layout)
+    return tuple(compile_function(step, also=[guidance]))
+
+
 def compiled_step(layout: Layout) -> ca.Function:
     """Natively compiled closed-loop step for ``layout`` (memoised in-process, cached on disk).
 
@@ -28,19 +46,19 @@ def compiled_step(layout: Layout) -> ca.Function:
     layout : Layout
         Closed-loop layout (ships, obstacles, walls, method) of the Function.
     """
-    return compile_function(build_closed_loop_step(layout))
+    return _library(layout)[0]
 
 
-@lru_cache(maxsize=64)
 def compiled_guidance(layout: Layout) -> ca.Function:
-    """Natively compiled guidance-only Function for ``layout`` (for timing guidance calls).
+    """Natively compiled guidance-only Function for ``layout`` (for timing guidance calls; the same library as
+    :func:`compiled_step`).
 
     Parameters
     ----------
     layout : Layout
         Closed-loop layout (ships, obstacles, walls, method) of the Function.
     """
-    return compile_function(build_guidance(layout))
+    return _library(layout)[1]
 
 
 @lru_cache(maxsize=64)
@@ -273,10 +291,16 @@ def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int 
     return _stream(layout, X0, P, width, call)
 
 
+def _bucket(n: int, width: int) -> int:
+    """Columns of the compiled call for ``n`` running scenarios: the next power of two, at most ``width`` (so a
+    draining batch reuses a few compiled widths instead of building one per count)."""
+    return min(width, 1 << (n - 1).bit_length())
+
+
 def _stream(layout: Layout, X0, P, width, call) -> tuple[np.ndarray, float]:
     """Step the columns of ``X0`` / ``P`` at most ``width`` at a time with ``call(x, p, active) -> x_next``
-    (``active``: the original column indices of ``x``); a column that finished leaves the batch and a waiting one
-    takes its place. Returns the final states and the time spent in ``call``."""
+    (``active``: the original column indices of ``x``, -1 for padding); a column that finished leaves the batch
+    and a waiting one takes its place. Returns the final states and the time spent in ``call``."""
     X0 = np.asarray(X0, float)
     P = np.asarray(P, float)
     M = X0.shape[1]
@@ -290,7 +314,14 @@ def _stream(layout: Layout, X0, P, width, call) -> tuple[np.ndarray, float]:
     busy = 0.0
     while active:
         t0 = time.perf_counter()
-        x = call(x, p, active)
+        n = len(active)
+        b = _bucket(n, width)
+        if b > n:  # pad to a width already built, with columns past their horizon (held: they cost nothing)
+            pad_x, pad_p = np.repeat(x[:, :1], b - n, axis=1), np.repeat(p[:, :1], b - n, axis=1)
+            pad_x[0] = pad_p[t_row]
+            x = call(np.hstack([x, pad_x]), np.hstack([p, pad_p]), active + [-1] * (b - n))[:, :n]
+        else:
+            x = call(x, p, active)
         busy += time.perf_counter() - t0
         done = _finished(layout, x, p[t_row])
         if not done.any():
@@ -369,7 +400,8 @@ def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chu
         xf, H = _chunk_history(layout, chunk, len(active), every)(x, p)
         H = np.array(H).reshape(len(rows), chunk // every, len(active))
         for k, j in enumerate(active):
-            hist[j].append(H[:, :, k].T)
+            if j >= 0:
+                hist[j].append(H[:, :, k].T)
         return np.array(xf)
 
     out, busy = _stream(layout, X0, P, width, call)

@@ -136,12 +136,20 @@ def velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *,
     DM([[0, 0, 0, 0, 1, 0, 0, 0]])
     """
     _check_structure(n_candidates, cone)
+    theta = -math.pi + 2 * math.pi * np.arange(int(n_candidates)) / int(n_candidates)
+    return _candidate_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance, cone,
+                            ca.DM(theta.reshape(1, -1)), ca.DM(np.vstack([np.cos(theta), np.sin(theta)])),
+                            current_heading)
+
+
+def _candidate_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance, cone, headings,
+                     directions, current_heading=None):
+    """:func:`velocity_obstacle_terms` for the candidate headings ``headings`` (1×n) with unit directions
+    ``directions`` (2×n): numbers (all candidates unrolled) or symbols (one candidate of a mapped loop)."""
     own_pos, goal, nb_pos, nb_vel = _col2(own_pos), _col2(goal), _matrix(nb_pos, 2), _matrix(nb_vel, 2)
-    m, n = nb_pos.size2(), int(n_candidates)
+    m, n = nb_pos.size2(), headings.size2()
     active = _row(active, m)
-    theta = -math.pi + 2 * math.pi * np.arange(n) / n
-    headings = ca.DM(theta.reshape(1, n))
-    v_cand = own_speed * ca.DM(np.vstack([np.cos(theta), np.sin(theta)]))
+    v_cand = own_speed * directions
     forbidden, penetration, halves = [], ca.DM.ones(1, n) * -math.pi, []
     for i in range(m):
         los = nb_pos[:, i] - own_pos
@@ -236,9 +244,10 @@ def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, colli
 def _vo_function(m, n, cone, with_heading):
     """The velocity obstacle for ``m`` neighbours as a never-inlined Function: a closed loop of many ships calls
     it once per ship but its code is generated (and compiled) only once."""
-    own, speed, goal = ca.SX.sym("own", 2), ca.SX.sym("U"), ca.SX.sym("goal", 2)
-    nb, nbv, act, dist = ca.SX.sym("nb", 2, m), ca.SX.sym("nbv", 2, m), ca.SX.sym("a", 1, m), ca.SX.sym("D")
-    ins = [own, speed, goal, nb, nbv, act, dist] + ([ca.SX.sym("h")] if with_heading else [])
+    X = ca.MX if m else ca.SX  # MX keeps the loop over the neighbours a loop
+    own, speed, goal = X.sym("own", 2), X.sym("U"), X.sym("goal", 2)
+    nb, nbv, act, dist = X.sym("nb", 2, m), X.sym("nbv", 2, m), X.sym("a", 1, m), X.sym("D")
+    ins = [own, speed, goal, nb, nbv, act, dist] + ([X.sym("h")] if with_heading else [])
     out = _velocity_obstacle_expr(own, speed, goal, nb, nbv, act, dist, n, cone, ins[7] if with_heading else None)
     tag = f"vo_m{m}_n{n}_{cone}{'_h' if with_heading else ''}"
     return ca.Function(tag, ins, [out], {"never_inline": True})
@@ -246,47 +255,78 @@ def _vo_function(m, n, cone, with_heading):
 
 def _velocity_obstacle_expr(own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance, n, cone,
                             current_heading):
-    """Expression of :func:`velocity_obstacle` (inputs already as CasADi matrices, ``n`` candidates)."""
+    """Expression of :func:`velocity_obstacle` (inputs already as CasADi matrices, ``n`` candidates).
+
+    With neighbours it is generated as a loop (``mapaccum``) over them of :func:`_neighbour_pass` followed by
+    :func:`_selection`: the same operations in the same order as unrolling them, in code whose size does not
+    grow with the number of neighbours."""
     m = nb_pos.size2()
+    if m == 0:
+        psi, _ = _selection_expr(None, goal, own_pos, n, current_heading)
+        return psi
+    acc = _neighbour_pass(n, cone).mapaccum(m)(
+        ca.DM.zeros(n + 1, 1), ca.vertcat(nb_pos, nb_vel, active), ca.repmat(own_pos, 1, m),
+        ca.repmat(own_speed, 1, m), ca.repmat(collision_distance, 1, m))[:, -1]
+    sel_args = [acc, goal, own_pos] + ([current_heading] if current_heading is not None else [])
+    psi, best_c = _selection(n, current_heading is not None)(*sel_args)
+    direct = (best_c >= _BIG / 2) + (acc[n] > 0)
+    args = [own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance]
+    if current_heading is not None:
+        args.append(current_heading)
+    psi_direct = _direct_function(m, n, cone, current_heading is not None)(ca.logic_not(direct), *args)
+    return ca.if_else(direct, psi_direct, psi)
+
+
+@functools.lru_cache(maxsize=None)
+def _neighbour_pass(n, cone):
+    """One neighbour's step of the velocity obstacle: ``(acc, [nb_pos; nb_vel; active], own_pos, own_speed, D)
+    -> acc`` where ``acc[:n]`` counts the neighbours forbidding each candidate and ``acc[n]`` the degenerate ones
+    (see :func:`velocity_obstacle`)."""
+    acc, col = ca.SX.sym("acc", n + 1), ca.SX.sym("nb", 5)
+    own_pos, own_speed, collision_distance = ca.SX.sym("own", 2), ca.SX.sym("U"), ca.SX.sym("D")
     theta = -math.pi + 2 * math.pi * np.arange(n) / n
     cos_t, sin_t = np.cos(theta), np.sin(theta)
     pair = n % 2 == 0
     half = n // 2 if pair else n
     # S_ij = sin α_i (l_i · w_ij) − cos α_i |l_i × w_ij| with w_ij = U (cos θ_j, sin θ_j) − v_i; forbidden ⟺ S_ij > 0
-    n_forb = None  # number of neighbours forbidding each candidate
-    degenerate = 0
-    for i in range(m):
-        los = nb_pos[:, i] - own_pos
-        dist_i = ca.norm_2(los)
-        r = collision_distance / ca.fmax(dist_i, R_MIN)
-        if cone == "huang":
-            r1 = ca.fmin(1, r)
-            sin_a, cos_a = r1, ca.sqrt(1 - r1 * r1)
-        else:  # 2 atan(r) ≥ π/2 ⟺ r ≥ 1
-            r1 = ca.fmin(1, r)
-            q = 1 + r1 * r1
-            sin_a, cos_a = 2 * r1 / q, (1 - r1 * r1) / q
-        on = active[i] == 1  # the direct product ∏(1 − active·forbidden) vanishes only for active == 1
-        sin_a, cos_a = ca.if_else(on, sin_a, 0), ca.if_else(on, cos_a, 1)  # off: S = −|l × w| ≤ 0, never > 0
-        us, ut = sin_a * own_speed, cos_a * own_speed
-        a, b = us * los[0], us * los[1]
-        k = sin_a * (los[0] * nb_vel[0, i] + los[1] * nb_vel[1, i])
-        e, f = -ut * los[1], ut * los[0]
-        g = cos_a * (los[0] * nb_vel[1, i] - los[1] * nb_vel[0, i])
-        # S_ij > 0 ⟺ x − k > |y − g| ⟺ (x − y > k − g) ∧ (x + y > k + g), x = U sin α l·u_j, y = U cos α l×u_j:
-        # both sides are linear in the candidate direction u_j; the opposite candidate (θ + π, n even) reuses the
-        # products with the comparisons reversed
-        p1, q1, k1, p2, q2, k2 = a - e, b - f, k - g, a + e, b + f, k + g
-        m1, m2 = -k1, -k2
-        hit = [None] * n
-        for j in range(half):
-            u1, u2 = p1 * cos_t[j] + q1 * sin_t[j], p2 * cos_t[j] + q2 * sin_t[j]
-            hit[j] = ca.logic_and(u1 > k1, u2 > k2)
-            if pair:
-                hit[j + half] = ca.logic_and(u1 < m1, u2 < m2)
-        n_forb = hit if n_forb is None else [c + h for c, h in zip(n_forb, hit)]
-        speed_gap = ca.fabs(ca.fabs(own_speed) - ca.norm_2(nb_vel[:, i]))
-        degenerate = degenerate + on * ((dist_i <= R_MIN) + (speed_gap <= 1e-5))
+    nb_pos, nb_vel, active = col[0:2], col[2:4], col[4]
+    los = nb_pos - own_pos
+    dist_i = ca.norm_2(los)
+    r = collision_distance / ca.fmax(dist_i, R_MIN)
+    if cone == "huang":
+        r1 = ca.fmin(1, r)
+        sin_a, cos_a = r1, ca.sqrt(1 - r1 * r1)
+    else:  # 2 atan(r) ≥ π/2 ⟺ r ≥ 1
+        r1 = ca.fmin(1, r)
+        q = 1 + r1 * r1
+        sin_a, cos_a = 2 * r1 / q, (1 - r1 * r1) / q
+    on = active == 1  # the direct product ∏(1 − active·forbidden) vanishes only for active == 1
+    sin_a, cos_a = ca.if_else(on, sin_a, 0), ca.if_else(on, cos_a, 1)  # off: S = −|l × w| ≤ 0, never > 0
+    us, ut = sin_a * own_speed, cos_a * own_speed
+    a, b = us * los[0], us * los[1]
+    k = sin_a * (los[0] * nb_vel[0] + los[1] * nb_vel[1])
+    e, f = -ut * los[1], ut * los[0]
+    g = cos_a * (los[0] * nb_vel[1] - los[1] * nb_vel[0])
+    # S_ij > 0 ⟺ x − k > |y − g| ⟺ (x − y > k − g) ∧ (x + y > k + g), x = U sin α l·u_j, y = U cos α l×u_j:
+    # both sides are linear in the candidate direction u_j; the opposite candidate (θ + π, n even) reuses the
+    # products with the comparisons reversed
+    p1, q1, k1, p2, q2, k2 = a - e, b - f, k - g, a + e, b + f, k + g
+    m1, m2 = -k1, -k2
+    hit = [None] * n
+    for j in range(half):
+        u1, u2 = p1 * cos_t[j] + q1 * sin_t[j], p2 * cos_t[j] + q2 * sin_t[j]
+        hit[j] = ca.logic_and(u1 > k1, u2 > k2)
+        if pair:
+            hit[j + half] = ca.logic_and(u1 < m1, u2 < m2)
+    speed_gap = ca.fabs(ca.fabs(own_speed) - ca.norm_2(nb_vel))
+    degenerate = on * ((dist_i <= R_MIN) + (speed_gap <= 1e-5))
+    out = ca.vertcat(*[acc[j] + hit[j] for j in range(n)], acc[n] + degenerate)
+    return ca.Function(f"vo_neighbour_n{n}_{cone}", [acc, col, own_pos, own_speed, collision_distance], [out])
+
+
+def _selection_expr(n_forb, goal, own_pos, n, current_heading):
+    """The goal-closest candidate not forbidden (``n_forb[j] == 0``; all when ``n_forb`` is None) and its cost."""
+    theta = -math.pi + 2 * math.pi * np.arange(n) / n
     goal_heading = ca.atan2(goal[1] - own_pos[1], goal[0] - own_pos[0])
     headings = ca.DM(theta.reshape(1, n))
     off_goal = wrap_angle(headings - goal_heading)
@@ -300,31 +340,53 @@ def _velocity_obstacle_expr(own_pos, own_speed, goal, nb_pos, nb_vel, active, co
         ok = cost[j] < best_c if n_forb is None else (n_forb[j] == 0) * (cost[j] < best_c)
         best_c = ca.if_else(ok, cost[j], best_c)
         best_th = ca.if_else(ok, theta[j], best_th)
-    psi = wrap_angle(best_th)
-    if m == 0:
-        return psi
-    direct = (best_c >= _BIG / 2) + (degenerate > 0)
-    args = [own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance]
-    if current_heading is not None:
-        args.append(current_heading)
-    psi_direct = _direct_function(m, n, cone, current_heading is not None)(ca.logic_not(direct), *args)
-    return ca.if_else(direct, psi_direct, psi)
+    return wrap_angle(best_th), best_c
+
+
+@functools.lru_cache(maxsize=None)
+def _selection(n, with_heading):
+    """:func:`_selection_expr` as a Function ``(acc, goal, own_pos[, heading]) -> (psi, best cost)``."""
+    acc, goal, own = ca.SX.sym("acc", n + 1), ca.SX.sym("goal", 2), ca.SX.sym("own", 2)
+    ins = [acc, goal, own] + ([ca.SX.sym("h")] if with_heading else [])
+    psi, best_c = _selection_expr([acc[j] for j in range(n)], goal, own, n, ins[3] if with_heading else None)
+    return ca.Function(f"vo_select_n{n}{'_h' if with_heading else ''}", ins, [psi, best_c])
 
 
 @functools.lru_cache(maxsize=None)
 def _direct_function(m, n, cone, with_heading):
-    """Never-inlined conditional: index 0 → the direct implementation, otherwise 0 (nothing evaluated)."""
+    """Never-inlined conditional: index 0 → the direct implementation, otherwise 0 (nothing evaluated).
+
+    The direct implementation is generated as loops over the candidates (a ``map`` of one candidate's terms
+    and a ``mapaccum`` of the selection), the same operations as :func:`_velocity_obstacle_reference` in the
+    same order, so its code stays small: it runs only in the rare fallback and degenerate cases."""
     own, speed, goal = ca.SX.sym("own", 2), ca.SX.sym("U"), ca.SX.sym("goal", 2)
     nb, nbv, act, dist = ca.SX.sym("nb", 2, m), ca.SX.sym("nbv", 2, m), ca.SX.sym("a", 1, m), ca.SX.sym("D")
     ins = [own, speed, goal, nb, nbv, act, dist] + ([ca.SX.sym("h")] if with_heading else [])
-    out = _velocity_obstacle_reference(own, speed, goal, nb, nbv, act, collision_distance=dist, n_candidates=n,
-                                       cone=cone, current_heading=ins[7] if with_heading else None)
     tag = f"vo_direct_m{m}_n{n}_{cone}{'_h' if with_heading else ''}"
-    full = ca.Function(tag + "_eval", ins, [out])
-    skip = ca.Function(tag + "_skip", ins, [ca.SX(0)])
+    th, u = ca.SX.sym("theta"), ca.SX.sym("u", 2)
+    t = _candidate_terms(own, speed, goal, nb, nbv, act, dist, cone, th, u, ins[7] if with_heading else None)
+    one = ca.Function(tag + "_candidate", [th, u] + ins, [t["feasible"], t["cost"], t["penetration"]])
+    state, inp = ca.SX.sym("best", 5), ca.SX.sym("cand", 4)
+    best_c, best_th, fb_p, fb_c, fb_th = (state[k] for k in range(5))
+    feasible, cost, pen, heading = (inp[k] for k in range(4))
+    better = feasible * (cost < best_c)
+    fb_better = (pen < fb_p - _PEN_TOL) + (ca.fabs(pen - fb_p) <= _PEN_TOL) * (cost < fb_c)
+    fold = ca.Function(tag + "_select", [state, inp], [ca.vertcat(
+        ca.if_else(better, cost, best_c), ca.if_else(better, heading, best_th),
+        ca.if_else(fb_better, pen, fb_p), ca.if_else(fb_better, cost, fb_c), ca.if_else(fb_better, heading, fb_th))])
+    theta = -math.pi + 2 * math.pi * np.arange(n) / n
+    xm = [ca.MX.sym(f"x{i}", v.sparsity()) for i, v in enumerate(ins)]
+    headings = ca.DM(theta.reshape(1, n))
+    feas, costs, pens = one.map(n)(headings, ca.DM(np.vstack([np.cos(theta), np.sin(theta)])), *xm)
+    goal_heading = ca.atan2(xm[2][1] - xm[0][1], xm[2][0] - xm[0][0])
+    init = ca.vertcat(_BIG, goal_heading, _BIG, _BIG, goal_heading)
+    final = fold.mapaccum(n)(init, ca.vertcat(feas, costs, pens, headings))[:, -1]
+    out = wrap_angle(ca.if_else(final[0] < _BIG / 2, final[1], final[4]))
+    full = ca.Function(tag + "_eval", xm, [out])
+    skip = ca.Function(tag + "_skip", xm, [ca.MX(0)])
     cond = ca.Function.conditional(tag + "_switch", [full], skip)
-    xm = [ca.MX.sym(f"x{i}", *cond.size_in(i)) for i in range(cond.n_in())]
-    return ca.Function(tag, xm, [cond(*xm)], {"never_inline": True})
+    xc = [ca.MX.sym(f"x{i}", *cond.size_in(i)) for i in range(cond.n_in())]
+    return ca.Function(tag, xc, [cond(*xc)], {"never_inline": True})
 
 
 def _velocity_obstacle_reference(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance,
