@@ -480,31 +480,41 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
 def _bookkeeping(layout: Layout, c: dict, x_next: list):
     """The next scenario state: closest approach and first collision, from the positions after the step, for
     every pair present at its start, and the clock."""
+    out = []
+    for i in range(layout.n_ships):
+        xn = x_next[i]
+        xn = ca.vertcat(xn[:S_["d_min"]], _encounter_row(layout, c, x_next, i), xn[S_["collision_with"] + 1:])
+        out.append(xn)
+    return ca.vertcat(ca.if_else(c["running"], c["t"] + c["P"]["dt"], c["t"]), *out)
+
+
+_ROW = ("d_min", "d_min_with", "t_collision", "collision_with")
+"""Rows of a ship's state updated by :func:`_encounter_row` (consecutive in :data:`SHIP_STATE`)."""
+
+
+def _encounter_row(layout: Layout, c: dict, x_next: list, i: int):
+    """Ship ``i``'s closest approach (and with whom) and first collision (when, with whom) after the step."""
     N, S = layout.n_ships, layout.n_obstacles
     P, t, present, running = c["P"], c["t"], c["present"], c["running"]
     dt = P["dt"]
     obs = P["obstacles"]
     pos_n = [xn[3:5] for xn in x_next]
-    out = []
-    for i in range(N):
-        xn = x_next[i]
-        d_min, d_with = xn[S_["d_min"]], xn[S_["d_min_with"]]
-        t_col, c_with = xn[S_["t_collision"]], xn[S_["collision_with"]]
-        counts_i = present[i]
-        agents = [(j, pos_n[j], present[j]) for j in range(N) if j != i]
-        agents += [(N + k, obs[0:2, k], ca.SX(1)) for k in range(S)]
-        for j, pj, pres_j in agents:
-            dij = ca.norm_2(pos_n[i] - pj)
-            valid = ca.logic_and(ca.logic_and(counts_i, pres_j), running)
-            closer = ca.logic_and(valid, dij < d_min)
-            d_min = ca.if_else(closer, dij, d_min)
-            d_with = ca.if_else(closer, j, d_with)
-            hit = ca.logic_and(ca.logic_and(valid, dij < P["collision_distance"]), t_col < 0)
-            t_col = ca.if_else(hit, t + dt, t_col)
-            c_with = ca.if_else(hit, j, c_with)
-        xn = ca.vertcat(xn[:S_["d_min"]], d_min, d_with, t_col, c_with, xn[S_["collision_with"] + 1:])
-        out.append(xn)
-    return ca.vertcat(ca.if_else(running, t + dt, t), *out)
+    xn = x_next[i]
+    d_min, d_with = xn[S_["d_min"]], xn[S_["d_min_with"]]
+    t_col, c_with = xn[S_["t_collision"]], xn[S_["collision_with"]]
+    counts_i = present[i]
+    agents = [(j, pos_n[j], present[j]) for j in range(N) if j != i]
+    agents += [(N + k, obs[0:2, k], ca.SX(1)) for k in range(S)]
+    for j, pj, pres_j in agents:
+        dij = ca.norm_2(pos_n[i] - pj)
+        valid = ca.logic_and(ca.logic_and(counts_i, pres_j), running)
+        closer = ca.logic_and(valid, dij < d_min)
+        d_min = ca.if_else(closer, dij, d_min)
+        d_with = ca.if_else(closer, j, d_with)
+        hit = ca.logic_and(ca.logic_and(valid, dij < P["collision_distance"]), t_col < 0)
+        t_col = ca.if_else(hit, t + dt, t_col)
+        c_with = ca.if_else(hit, j, c_with)
+    return ca.vertcat(d_min, d_with, t_col, c_with)
 
 
 @functools.lru_cache(maxsize=16)
@@ -521,14 +531,15 @@ def _sparse_functions(layout: Layout, ship: ShipParams, steering: SteeringParams
     xs, ps = ca.SX.sym("x", layout.nx), ca.SX.sym("p", layout.np)
     c = _step_context(layout, xs, ps)
     shared = ca.vertcat(*[ca.vertcat(c["pos"][i], c["vel"][i], c["present"][i]) for i in range(N)])
-    pre = ca.Function(f"pre_{key}", [xs, ps], [shared, ca.vertcat(*c["sailing"])], {"cse": True})
+    counted = [ca.logic_and(c["present"][i], c["running"]) for i in range(N)]
+    pre = ca.Function(f"pre_{key}", [xs, ps], [shared, ca.vertcat(*c["sailing"]), ca.vertcat(*counted)],
+                      {"cse": True})
     sh = ca.SX.sym("shared", 5 * N)
     cs = _step_context(layout, xs, ps, shared=sh)
     nxt = ca.SX.sym("next", N * NS)
-    post = ca.Function(f"post_{key}", [xs, ps, nxt],
-                       [_bookkeeping(layout, c, [nxt[i * NS:(i + 1) * NS] for i in range(N)])], {"cse": True})
+    rows_next = [nxt[i * NS:(i + 1) * NS] for i in range(N)]
     x, p = ca.MX.sym("x", layout.nx), ca.MX.sym("p", layout.np)
-    sh_mx, sailing = pre(x, p)
+    sh_mx, sailing, counts = pre(x, p)
     news, auxs, rudders = [], [], []
     for i in range(N):
         new, aux_i = _ship_update(layout, i, cs, mmg, n_sub, sparse=True)
@@ -540,7 +551,18 @@ def _sparse_functions(layout: Layout, ship: ShipParams, steering: SteeringParams
         steer = ca.Function(f"steer{i}_{key}", [xs, ps, sh], [aux_i[0]], {"cse": True})
         idle = ca.Function(f"idle{i}_{key}", [xs, ps, sh], [ca.DM.nan(1, 1)])
         rudders.append(ca.Function.conditional(f"rudder{i}_{key}", [idle], steer)(sailing[i], x, p, sh_mx))
-    step = ca.Function(f"closed_loop_{key}", [x, p], [post(x, p, ca.vertcat(*news)), ca.horzcat(*auxs)],
+    # closest approach and collisions: a ship absent at the start of the step (or past the horizon) keeps its row
+    nxt_mx = ca.vertcat(*news)
+    r0, r1 = S_[_ROW[0]], S_[_ROW[-1]] + 1
+    clock = ca.Function(f"clock_{key}", [xs, ps], [ca.if_else(c["running"], c["t"] + c["P"]["dt"], c["t"])])
+    rows = [clock(x, p)]
+    for i in range(N):
+        update = ca.Function(f"meet{i}_{key}", [xs, ps, nxt], [_encounter_row(layout, c, rows_next, i)],
+                             {"cse": True})
+        keep = ca.Function(f"keep{i}_{key}", [xs, ps, nxt], [rows_next[i][r0:r1]])
+        row = ca.Function.conditional(f"row{i}_{key}", [keep], update)(counts[i], x, p, nxt_mx)
+        rows += [news[i][:r0], row, news[i][r1:]]
+    step = ca.Function(f"closed_loop_{key}", [x, p], [ca.vertcat(*rows), ca.horzcat(*auxs)],
                        ["x", "p"], ["x_next", "aux"])
     guidance = ca.Function(f"guidance_{key}", [x, p], [ca.horzcat(*rudders)], ["x", "p"], ["delta_c"])
     return step, guidance

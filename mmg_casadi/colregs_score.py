@@ -341,7 +341,7 @@ def _side(enc, t, pos, psi, spd, pos_o, psi_o, cpa_pred, tcpa_pred, dist, k_ente
 
 
 def score_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, profile=LAB_PROFILE, speed_a=None,
-               speed_b=None, active_a=None, active_b=None) -> PairScore:
+               speed_b=None, active_a=None, active_b=None, judge_b: bool = True) -> PairScore:
     """Rule-by-rule COLREG verdicts of ships a and b from their trajectories.
 
     The encounter begins at ``t_enter``, the first sample with both ships active and closer than ``r_safe``;
@@ -392,6 +392,9 @@ def score_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pro
         Speeds over ground (L/(L/U)); default: from the positions.
     active_a, active_b : array (T,) of bool, optional
         Whether each ship is still sailing (default: always).
+    judge_b : bool, default True
+        Judge ship b too; with False her side has her encounter type only (no verdicts), for callers that
+        need ship a's verdicts alone.
 
     Returns
     -------
@@ -443,5 +446,5 @@ def score_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pro
     enc_b = classify_encounter(pos_b[k_enter], psi_b[k_enter], pos_a[k_enter], psi_a[k_enter], profile)
     common = (cpa_pred, tcpa_pred, dist, k_enter, k_cpa, window, passage, min_distance, collision_distance, profile)
     side_a = _side(enc_a, t, pos_a, psi_a, spd[0], pos_b, psi_b, *common)
-    side_b = _side(enc_b, t, pos_b, psi_b, spd[1], pos_a, psi_a, *common)
+    side_b = _side(enc_b, t, pos_b, psi_b, spd[1], pos_a, psi_a, *common) if judge_b else _empty_side(enc_b)
     return PairScore(profile.name, side_a, side_b)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import colregs
+from .colregs_score import score_pair
 from .simulation import sailing_mask
 
 
@@ -57,9 +58,10 @@ def own_ship_compliance(t, states, *, r_safe: float, collision_distance: float,
     near = np.any((dist <= r_safe) & mask[:, :1] & mask[:, 1:], axis=0)
     verdicts = []
     for j in 1 + np.flatnonzero(near):
-        a = colregs.assess_pair(t, pos0, psi0, states[:, j, :2], states[:, j, 2], r_safe=r_safe,
-                                collision_distance=collision_distance, profile=profile, active_a=mask[:, 0],
-                                active_b=mask[:, j])
-        if a.encounter != "none" and a.compliant is not None:
-            verdicts.append(bool(a.compliant))
+        # the own ship's side of colregs.assess_pair (the other ship's verdicts are not needed here)
+        a = score_pair(t, pos0, psi0, states[:, j, :2], states[:, j, 2], r_safe=r_safe,
+                       collision_distance=collision_distance, profile=profile, active_a=mask[:, 0],
+                       active_b=mask[:, j], judge_b=False).a
+        if a.encounter != "none" and a.compliant_all is not None:
+            verdicts.append(bool(a.compliant_all))
     return (all(verdicts) if verdicts else None), len(verdicts)

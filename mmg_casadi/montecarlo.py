@@ -102,8 +102,9 @@ DEFAULT_BATCH = 128
 """Runs per task (the unit of resumption): ≥ ~1 s of compiled work even for the lightest cell; inside a task
 :func:`~mmg_casadi.simulation.simulate_batch` steps ``DEFAULT_WIDTH`` runs side by side and refills finished
 columns with waiting runs."""
-DEFAULT_CHUNK = 24
-"""Steps per ``mapaccum`` chunk (the rollout stops after the chunk in which every run has finished)."""
+DEFAULT_CHUNK = 48
+"""Steps per ``mapaccum`` chunk (the rollout stops after the chunk in which every run has finished; outcomes do not
+depend on it: the clock stops at the horizon and a finished run is held)."""
 MAX_FAILURE_FILES = 20
 """Replayable scenario files written per (environment, method) cell."""
 TIMING_COLUMNS: tuple[str, ...] = ("guidance_call_us",)
@@ -304,7 +305,7 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
         Decimated history (:meth:`mmg_casadi.simulation.BatchHistory.column`).
     """
     from .compliance import own_ship_compliance
-    from .failures import failure_mechanism, turn_time_90
+    from .failures import failure_mechanism, turn_time_90, unavoidable_at_start
     P = model.params
     row = classify(model, x_final)
     own = model.outcomes(x_final)[0]
@@ -314,10 +315,21 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
     if own["collision_time"] is not None and len(t) > 1:
         at = np.column_stack([np.interp(own["collision_time"], t, states[:, :, c][:, i])
                               for i in range(states.shape[1]) for c in (0, 1)]).reshape(-1, 2)
+    unavoidable = False
+    if own["collision_time"] is not None:
+        j, ships = own["collision_with"], scenario.ships
+        if j < len(ships):
+            h = math.radians(ships[j].heading_deg)
+            other, vel = ships[j].start, (ships[j].speed * math.cos(h), ships[j].speed * math.sin(h))
+        else:
+            other, vel = obstacles[j - len(ships)], (0.0, 0.0)
+        unavoidable = unavoidable_at_start(ships[0].start, math.radians(ships[0].heading_deg), ships[0].speed,
+                                           other, vel, collision_distance=float(P["collision_distance"]),
+                                           rudder_deg=float(P["delta_max_deg"]))
     mech = failure_mechanism(row["failure"], collision_time=own["collision_time"],
                              collision_with=own["collision_with"], goals=goals, obstacles=obstacles,
                              positions_at_collision=at, turn_time=turn_time_90(float(P["delta_max_deg"])),
-                             near_goal_distance=float(P["near_goal_distance"]))
+                             near_goal_distance=float(P["near_goal_distance"]), unavoidable=unavoidable)
     compliant, n = own_ship_compliance(t, states, r_safe=float(P["r_safe"]),
                                        collision_distance=float(P["collision_distance"]))
     return {"failure_mechanism": mech, "colregs_compliant": compliant, "colregs_encounters": n}

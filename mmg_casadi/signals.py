@@ -246,7 +246,7 @@ def stop_pool(pool, timeout: float = 5.0) -> None:
         (none if it has no such attribute, in which case the pool is only shut down without waiting).
     timeout : float, optional
         Seconds to wait for each worker process to exit after SIGTERM (``Process.join``); default 5. A worker
-        still alive after that is left running.
+        still alive after that is killed (SIGKILL).
 
     Examples
     --------
@@ -267,3 +267,7 @@ def stop_pool(pool, timeout: float = 5.0) -> None:
             proc.terminate()
     for proc in processes:
         proc.join(timeout)
+    for proc in processes:  # e.g. SIGTERM arrived before the initializer restored its default action
+        if proc.is_alive():
+            proc.kill()
+            proc.join(timeout)

@@ -324,16 +324,26 @@ def _neighbour_pass(n, cone):
     return ca.Function(f"vo_neighbour_n{n}_{cone}", [acc, col, own_pos, own_speed, collision_distance], [out])
 
 
+def _reduce(d):
+    """``d`` in (−2π, 2π) brought into (−π, π] by adding or subtracting 2π (no trigonometry)."""
+    return d - 2 * ca.pi * (d > ca.pi) + 2 * ca.pi * (d <= -ca.pi)
+
+
 def _selection_expr(n_forb, goal, own_pos, n, current_heading):
-    """The goal-closest candidate not forbidden (``n_forb[j] == 0``; all when ``n_forb`` is None) and its cost."""
+    """The goal-closest candidate not forbidden (``n_forb[j] == 0``; all when ``n_forb`` is None) and its cost.
+
+    The angles between candidates and the goal direction (and the current heading) are reduced to (−π, π] by
+    adding or subtracting 2π instead of :func:`~mmg_casadi.guidance.wrap_angle` (atan2 of sine and cosine,
+    the form of the direct implementation): the costs differ in the last bits only, so the chosen candidate
+    is the same except at exact ties, and 2 × ``n`` trigonometric calls per evaluation are saved."""
     theta = -math.pi + 2 * math.pi * np.arange(n) / n
     goal_heading = ca.atan2(goal[1] - own_pos[1], goal[0] - own_pos[0])
     headings = ca.DM(theta.reshape(1, n))
-    off_goal = wrap_angle(headings - goal_heading)
+    off_goal = _reduce(headings - goal_heading)
     if current_heading is None:
         tie = off_goal < 0
     else:
-        tie = ca.fabs(wrap_angle(headings - current_heading)) / ca.pi
+        tie = ca.fabs(_reduce(headings - wrap_angle(current_heading))) / ca.pi
     cost = ca.fabs(off_goal) + TIE_EPS * tie
     best_c, best_th = _BIG, goal_heading
     for j in range(n):

@@ -5,7 +5,7 @@ import math
 import pytest
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.failures import MECHANISMS, failure_mechanism, turn_time_90
+from mmg_casadi.failures import MECHANISMS, failure_mechanism, turn_time_90, unavoidable_at_start
 from mmg_casadi.maneuvers import turning_circle
 from mmg_casadi.montecarlo import run_scenarios
 from mmg_casadi.results import MECHANISMS as RESULT_MECHANISMS
@@ -83,3 +83,24 @@ def test_short_scenarios_are_classified_from_their_rollout():
     assert [r["failure"] for r in rows] == ["collision"] * 4
     assert [r["failure_mechanism"] for r in rows] == ["started-too-close", "obstacle-near-goal", "obstacle",
                                                       "ship-ship"]
+
+
+def test_unavoidable_at_start_tries_holding_and_both_hard_turns():
+    kw = dict(collision_distance=2.0)
+    # an obstacle 3 L dead ahead: the turning circle's advance (3.6 L) carries the ship into it whichever way
+    assert unavoidable_at_start([0, 0], 0.0, 1.0, [3.0, 0.0], [0, 0], **kw)
+    # 3 L off on the beam: holding course passes it at 3 L
+    assert not unavoidable_at_start([0, 0], 0.0, 1.0, [0.0, 3.0], [0, 0], **kw)
+    # 8 L dead ahead: the advance of a hard turn (3.6 L at design speed) stays short of it
+    assert not unavoidable_at_start([0, 0], 0.0, 1.0, [8.0, 0.0], [0, 0], **kw)
+    # a ship overtaking at twice the speed 4 L astern on the own track: a 90 deg turn moves only ~1.6 L sideways
+    assert unavoidable_at_start([0, 0], 0.0, 0.5, [-4.0, 0.0], [1.0, 0.0], **kw)
+    # rotation: the same head-on geometry pointing north-east is still unavoidable
+    c = math.cos(math.pi / 4)
+    assert unavoidable_at_start([0, 0], math.pi / 4, 1.0, [6 * c, 6 * c], [-c, -c], **kw)
+
+
+def test_an_unavoidable_collision_started_too_close_whenever_it_happens():
+    args = dict(collision_time=40.0, collision_with=1, goals=[[50, 0], [0, 0]], obstacles=[], turn_time=4.0)
+    assert failure_mechanism("collision", **args, unavoidable=True) == "started-too-close"
+    assert failure_mechanism("collision", **args) == "ship-ship"
