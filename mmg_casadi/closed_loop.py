@@ -897,9 +897,9 @@ class ClosedLoopModel:
         return build_closed_loop_step(lay)
 
     def compiled_step(self) -> ca.Function:
-        """The natively compiled exact step (cached on disk)."""
-        from .compiled import compile_function
-        return compile_function(self.step())
+        """The natively compiled exact step the rollouts use (its sparse form, cached on disk)."""
+        from .simulation import compiled_step
+        return compiled_step(self.layout)
 
     def pack(self, ships: list[dict], obstacles=(), walls=()) -> np.ndarray:
         """Numeric parameter vector (:func:`pack_params`) with this model's parameter values.
