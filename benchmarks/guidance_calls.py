@@ -4,7 +4,10 @@ For every method (inverse-square, sink-vortex, modified-vortex, velocity-obstacl
 ships (so each ship has 1, 5 or 13 neighbours, all inside R_safe), the natively compiled guidance Function
 (:func:`mmg_casadi.simulation.compiled_guidance`: reactive field / velocity obstacle, ILOS and PD for every ship)
 is mapped over many scenario states and timed; the time is divided by the number of states and ships. Printed
-in nanoseconds and as a ratio to inverse-square with 1 neighbour (the paper's "computation effort" panel).
+in nanoseconds and as a ratio to inverse-square with 1 neighbour (the paper's "computation effort" panel). Every
+neighbour is within R_safe, so this is the worst case of the guidance the rollouts run (which evaluates a method
+on the neighbours within R_safe only); the Monte Carlo study's ``guidance_call_us`` column times the same
+guidance in the study's own configurations.
 
 The first run compiles the Functions (the velocity obstacle with 14 ships takes several minutes with gcc -O2);
 later runs load them from the cache (``$MMG_CASADI_CACHE`` or ``~/.cache/mmg-casadi``).
