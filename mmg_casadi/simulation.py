@@ -79,6 +79,34 @@ def _chunk_final(layout: Layout, chunk: int, batch: int) -> ca.Function:
     return ca.Function(f"chunk_final_{layout.key()}_{chunk}_{batch}", [x, p], [X[:, -batch:]])
 
 
+class _Bound:
+    """A dense Function called through CasADi's buffer interface: its inputs and outputs are numpy arrays bound
+    once, so a call copies the inputs in and the outputs out without converting to and from ``DM``."""
+
+    def __init__(self, f: ca.Function):
+        self.f = f
+        self.buf, self.trigger = f.buffer()
+        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
+        self.res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
+        self.shapes = [f.size_out(i) for i in range(f.n_out())]
+        for i, a in enumerate(self.args):
+            self.buf.set_arg(i, memoryview(a))
+        for i, r in enumerate(self.res):
+            self.buf.set_res(i, memoryview(r))
+
+    def __call__(self, *inputs) -> list[np.ndarray]:
+        for a, x in zip(self.args, inputs):
+            a[:] = np.asarray(x, float).ravel(order="F")
+        self.trigger()
+        return [r.reshape(shape, order="F").copy() for r, shape in zip(self.res, self.shapes)]
+
+
+@lru_cache(maxsize=64)
+def _bound(kind: str, layout: Layout, chunk: int, batch: int, every: int = 1) -> _Bound:
+    f = _chunk_final(layout, chunk, batch) if kind == "final" else _chunk_history(layout, chunk, batch, every)
+    return _Bound(f)
+
+
 HISTORY_STATE: tuple[str, ...] = ("x", "y", "psi", "status")
 """Ship state variables kept by :func:`simulate_batch_history`."""
 
@@ -286,7 +314,7 @@ def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int 
         Final scenario states ``(nx, M)`` and the wall time spent in compiled code (s).
     """
     def call(x, p, active):
-        return np.array(_chunk_final(layout, chunk, len(active))(x, p))
+        return _bound("final", layout, chunk, len(active))(x, p)[0]
 
     return _stream(layout, X0, P, width, call)
 
@@ -397,8 +425,8 @@ def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chu
     hist: list[list[np.ndarray]] = [[X0[rows, j][None, :]] for j in range(M)]
 
     def call(x, p, active):
-        xf, H = _chunk_history(layout, chunk, len(active), every)(x, p)
-        H = np.array(H).reshape(len(rows), chunk // every, len(active))
+        xf, H = _bound("history", layout, chunk, len(active), every)(x, p)
+        H = H.reshape(len(rows), chunk // every, len(active))
         for k, j in enumerate(active):
             if j >= 0:
                 hist[j].append(H[:, :, k].T)
