@@ -12,6 +12,8 @@ keep my course" predictions are judged against it, so the own evasive turn chang
   being overtaken by the own ship (``|α| > γ_max``). Everything else, including static obstacles (speed below
   ``v_ship_min``), is **give-way** and gets the paper's modified vortex
   (:func:`~mmg_casadi.fields.modified_vortex_terms`).
+- **Static obstacles** get the vortex only while the range closes (once it opens the ship is past it; without
+  this a far goal's weak sink lets the vortex hold the ship in an orbit about the obstacle).
 - **Rule 17(a)(i)**: a stand-on neighbour gets no vortex — course and speed are kept.
 - **Rule 17(a)(ii) and 17(b)**: the stand-on ship acts alone when the give-way ship has not made the passing
   safe in time: the CPA distance *if the own ship kept its planned course* is below ``d_cpa_act`` while the
@@ -41,7 +43,10 @@ keep my course" predictions are judged against it, so the own evasive turn chang
   with combined radius ``d_cq`` (:mod:`mmg_casadi.velocity_obstacle`). The velocity judged is the one at the
   heading the ship turns through next on its way to the field's, at most ``dpsi_cq`` from its present heading
   (a reversal to starboard through a ship abeam is not admissible because its end point is); if it is inside
-  a cone, the ship steers the admissible heading closest to it (the least-penetrating one if none is). Terms of several
+  a cone, the ship steers the admissible heading (the velocity obstacle's candidate) closest to a readily
+  apparent alteration of its present heading to starboard (``dpsi_min``, Rule 8): a small alteration it can
+  complete quickly, to starboard unless that is much longer (the least-penetrating candidate if none is
+  admissible). Terms of several
   neighbours, or of a neighbour and the rules, can cancel or point into a third ship; this filter is what
   keeps their sum out of the way of whatever is close.
 
@@ -113,8 +118,8 @@ class ColregsVortexParams:
         15 L = R_safe, the range at which avoidance starts.
     r_cq : float
         Range within which a neighbour's collision cone filters the field's heading, close quarters (L, ≥ 0;
-        0 disables the filter); 5 L = ``r_guard``'s default, about the KCS's advance in a full-rudder 90° turn
-        plus the collision distance.
+        0 disables the filter); 8 L = ``r_act``, the range at which the stand-on ship acts whatever the TCPA
+        (4 collision distances).
     d_cq : float
         Combined radius of those cones (L, > 0); 3 L = 1.5 × the 2 L collision distance, the margin
         ``d_cpa_act`` also uses, for the heading the ship has not reached yet.
@@ -174,8 +179,9 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     stand-on ship acts alone, 17(a)(ii)/(b)), ``act`` (``act_alone`` or a give-way escalation), ``weight``
     (strength of the escape term), ``escape`` (2×M unit escape directions), ``k_vor`` (give-way vortex
     strength), ``threat`` (1 where the Rule 8 minimum alteration applies), ``guard`` (radial push strength),
-    ``avoid`` (1 where the neighbour is being avoided). ``d_att_floor``, ``r_cq``, ``d_cq`` and ``dpsi_cq`` are accepted so
-    that :meth:`ColregsVortexParams.as_dict` can be passed whole; only :func:`colregs_vortex` uses them.
+    ``avoid`` (1 where the neighbour is being avoided). ``d_att_floor``, ``r_cq``, ``d_cq`` and ``dpsi_cq`` are
+    accepted so that :meth:`ColregsVortexParams.as_dict` can be passed whole; only :func:`colregs_vortex` uses
+    them.
 
     Parameters
     ----------
@@ -278,7 +284,9 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     escape = escape / ca.repmat(ca.fmax(ca.sqrt(ca.sum1(escape * escape)), 1e-9), 2, 1)
 
     giveway = 1 - stand_on
-    k_vor = giveway * mv["k_vor"]
+    # a static obstacle is circled only while the range closes: once it opens the ship is past it (without this
+    # the vortex can hold the ship in an orbit about an obstacle when the goal is far and its sink weak)
+    k_vor = giveway * mv["k_vor"] * (ship + (1 - ship) * (mv["v_r"] < 0))
     threat = ship * closing * ((giveway * (1 - astern) * (dcpa < d_clear) + act) > 0)
     guard = lam_guard * ca.fmax(0, 1 / d - 1 / r_guard)  # radial push away inside r_guard, whatever the rules
     avoid = ((k_vor != 0) + act + threat + (d < r_guard)) > 0
@@ -390,10 +398,11 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
     psi_f = ca.atan2(out[1], out[0])
     # the heading the ship turns through next: at most dpsi_cq from its own on the way to the field's
     psi_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_cq), dpsi_cq)
-    e_next = ca.vertcat(ca.cos(psi_next), ca.sin(psi_next))
     speed = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
     ok = heading_feasible(own_pos, speed, psi_next, nb_pos, nb_vel, close, collision_distance=d_cq)
-    psi_vo = velocity_obstacle(own_pos, speed, own_pos + e_next, nb_pos, nb_vel, close, collision_distance=d_cq,
+    psi_pref = own_psi + dpsi_min  # a readily apparent alteration to starboard (Rule 8) is preferred
+    e_pref = ca.vertcat(ca.cos(psi_pref), ca.sin(psi_pref))
+    psi_vo = velocity_obstacle(own_pos, speed, own_pos + e_pref, nb_pos, nb_vel, close, collision_distance=d_cq,
                                n_candidates=n_candidates, current_heading=own_psi)
     psi_out = ca.if_else(ok, psi_f, psi_vo)
     return ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_out), ca.sin(psi_out))

@@ -1,5 +1,6 @@
-"""colregs-vortex close-quarters filter (Rule 17(b)): the field's heading leaves the collision cone of whatever is
-within ``r_cq``, as little as possible, and is left alone otherwise."""
+"""colregs-vortex close-quarters filter (Rule 17(b)): a heading that turns the ship into the collision cone of
+whatever is within ``r_cq`` is replaced by the admissible one closest to a readily apparent starboard alteration
+of the present heading; others are left alone."""
 
 import math
 
@@ -39,15 +40,15 @@ def next_heading(h):
 def test_turn_through_a_close_buoy_is_refused(buoy):
     pos, vel = [HEAD_ON[0], buoy], [HEAD_ON[1], [0.0, 0.0]]
     assert math.hypot(*buoy) < CV.r_cq
-    free = heading(pos, vel, r_cq=0.0)  # the field alone: a starboard turn that sweeps through the buoy's cone
+    free = heading(pos, vel, r_cq=0.0)  # the field alone: a starboard turn (Rule 8) into the buoy's cone
     h = heading(pos, vel)
-    assert free > CV.dpsi_cq and not feasible(next_heading(free), pos, vel, [0, 1])
-    assert feasible(next_heading(h), pos, vel, [0, 1])
-    # no admissible candidate heading is closer to the one the ship was turning through
+    assert free > 0 and not feasible(next_heading(free), pos, vel, [0, 1])
+    assert feasible(h, pos, vel, [0, 1])
+    # the admissible candidate closest to a readily apparent starboard alteration of the present heading (0)
     n = 80
     cands = [-math.pi + 2 * math.pi * j / n for j in range(n)]
-    best = min(abs(c - CV.dpsi_cq) for c in cands if feasible(c, pos, vel, [0, 1]))
-    assert abs(h - CV.dpsi_cq) <= best + 1e-9
+    best = min(abs(c - CV.dpsi_min) for c in cands if feasible(c, pos, vel, [0, 1]))
+    assert abs(h - CV.dpsi_min) == pytest.approx(best, abs=1e-9)
 
 
 def test_admissible_field_heading_is_left_alone():
@@ -81,3 +82,26 @@ def test_the_ship_never_turns_towards_a_close_ship(nb, nb_vel):
     assert passing_distance(next_heading(free)) < CV.d_cq  # the situation needs the filter
     assert max(passing_distance(next_heading(h)), passing_distance(h)) >= CV.d_cq - 1e-6
 
+
+
+def test_symbolic_function_matches_numeric_call_with_the_filter_acting():
+    x = ca.SX.sym("x", 2)
+    nb = ca.SX.sym("nb", 2, 2)
+    nb_vel = ca.DM([[-1.0, 0.0], [0.0, 0.0]])
+    f = ca.Function("cv", [x, nb], [colregs_vortex(x, 0.0, [1.0, 0.0], [50.0, 0.0], nb, nb_vel, [1, 1], **KW)])
+    args = (ca.DM([0.0, 0.0]), ca.DM([[10.0, 2.0], [0.0, 3.0]]))  # the first buoy case above
+    h_sym = float(heading_of(f(*args)))
+    assert h_sym == pytest.approx(heading([HEAD_ON[0], [2.0, 3.0]], [HEAD_ON[1], [0.0, 0.0]]), abs=1e-12)
+    assert h_sym != pytest.approx(heading([HEAD_ON[0], [2.0, 3.0]], [HEAD_ON[1], [0.0, 0.0]], r_cq=0.0), abs=1e-3)
+
+
+@pytest.mark.parametrize("field, name, value, table_value", [
+    ("r_cq", "cv_r_cq", -1.0, -1.0), ("d_cq", "cv_d_cq", 0.0, 0.0), ("dpsi_cq", "cv_dpsi_cq_deg", 0.0, 0.0),
+    ("dpsi_cq", "cv_dpsi_cq_deg", 4.0, math.degrees(4.0))])
+def test_filter_parameters_are_range_checked(field, name, value, table_value):
+    from mmg_casadi.closed_loop import default_globals
+    from mmg_casadi.errors import ParameterError
+    with pytest.raises(ParameterError, match=name):
+        ColregsVortexParams(**{field: value})
+    with pytest.raises(ParameterError, match=name):
+        default_globals(**{name: table_value})
