@@ -46,9 +46,8 @@ keep my course" predictions are judged against it, so the own evasive turn chang
   a cone, the ship steers the admissible heading (the velocity obstacle's candidate) closest to a readily
   apparent alteration of its present heading to starboard (``dpsi_min``, Rule 8): a small alteration it can
   complete quickly, to starboard unless that is much longer (the least-penetrating candidate if none is
-  admissible). Terms of several
-  neighbours, or of a neighbour and the rules, can cancel or point into a third ship; this filter is what
-  keeps their sum out of the way of whatever is close.
+  admissible). Terms of several neighbours, or of a neighbour and the rules, can cancel or point into a third
+  ship; this filter is what keeps their sum out of the way of whatever is close.
 
 Everything is branch-free CasADi (0/1 products and ``if_else``), with no closed-loop state. The exact switches
 are used even when the closed loop asks for smooth ones (``Layout.smooth``).
