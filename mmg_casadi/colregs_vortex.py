@@ -12,6 +12,8 @@ keep my course" predictions are judged against it, so the own evasive turn chang
   being overtaken by the own ship (``|α| > γ_max``). Everything else, including static obstacles (speed below
   ``v_ship_min``), is **give-way** and gets the paper's modified vortex
   (:func:`~mmg_casadi.fields.modified_vortex_terms`).
+- **Static obstacles** get the vortex only while the range closes (once it opens the ship is past it; without
+  this a far goal's weak sink lets the vortex hold the ship in an orbit about the obstacle).
 - **Rule 17(a)(i)**: a stand-on neighbour gets no vortex — course and speed are kept.
 - **Rule 17(a)(ii) and 17(b)**: the stand-on ship acts alone when the give-way ship has not made the passing
   safe in time: the CPA distance *if the own ship kept its planned course* is below ``d_cpa_act`` while the
@@ -35,6 +37,17 @@ keep my course" predictions are judged against it, so the own evasive turn chang
   an obstacle near the goal keeps its weight and the obstacle is passed on the vortex's side.
 - **Guard**: inside ``r_guard`` every neighbour also pushes radially, λ_guard (1/d − 1/r_guard), a last-resort
   term for whatever the rules above did not resolve.
+- **Close quarters** (Rule 17(b) "best aid to avoid collision", Rule 2(b) departure to avoid immediate danger):
+  the heading of the whole field is kept unless its velocity (at the current speed) lies inside the collision
+  cone of a ship or obstacle within ``r_cq``, the linear velocity obstacle of Huang et al. 2018 (Ocean Eng. 151)
+  with combined radius ``d_cq`` (:mod:`mmg_casadi.velocity_obstacle`). The velocity judged is the one at the
+  heading the ship turns through next on its way to the field's, at most ``dpsi_cq`` from its present heading
+  (a reversal to starboard through a ship abeam is not admissible because its end point is); if it is inside
+  a cone, the ship steers the admissible heading (the velocity obstacle's candidate) closest to a readily
+  apparent alteration of its present heading to starboard (``dpsi_min``, Rule 8): a small alteration it can
+  complete quickly, to starboard unless that is much longer (the least-penetrating candidate if none is
+  admissible). Terms of several neighbours, or of a neighbour and the rules, can cancel or point into a third
+  ship; this filter is what keeps their sum out of the way of whatever is close.
 
 Everything is branch-free CasADi (0/1 products and ``if_else``), with no closed-loop state. The exact switches
 are used even when the closed loop asks for smooth ones (``Layout.smooth``).
@@ -51,6 +64,7 @@ from .params import check_fields
 from .params import field as param_field
 from .fields import R_MIN, _col2, _matrix, _row, modified_vortex_terms, vortex
 from .guidance import wrap_angle
+from .velocity_obstacle import heading_feasible, velocity_obstacle
 
 _BIG = 1.0e6
 
@@ -101,6 +115,18 @@ class ColregsVortexParams:
     d_att_floor : float
         While anything is avoided, the goal attracts at most as strongly as from this distance (L, ≥ 0);
         15 L = R_safe, the range at which avoidance starts.
+    r_cq : float
+        Range within which a neighbour's collision cone filters the field's heading, close quarters (L, ≥ 0;
+        0 disables the filter); 8 L = ``r_act``, the range at which the stand-on ship acts whatever the TCPA
+        (4 collision distances).
+    d_cq : float
+        Combined radius of those cones (L, > 0); 3 L = 1.5 × the 2 L collision distance, the margin
+        ``d_cpa_act`` also uses, for the heading the ship has not reached yet.
+    dpsi_cq : float
+        The filter judges not the field's heading itself but the heading the ship turns through next on its
+        way there, at most this far from its present heading (rad, (0, π]); 45° ≈ what the KCS turns in
+        half of ``t_close`` (3 L/U ≈ its 90° turn with full rudder), while the PD's rudder is saturated
+        anyway for any larger heading error.
     """
 
     theta_head_on: float = param_field("cv_theta_head_on_deg", math.pi / 180.0)
@@ -115,6 +141,9 @@ class ColregsVortexParams:
     r_guard: float = param_field("cv_r_guard")
     lam_guard: float = param_field("cv_lam_guard")
     d_att_floor: float = param_field("cv_d_att_floor")
+    r_cq: float = param_field("cv_r_cq")
+    d_cq: float = param_field("cv_d_cq")
+    dpsi_cq: float = param_field("cv_dpsi_cq_deg", math.pi / 180.0)
 
     def __post_init__(self):
         check_fields(self)
@@ -140,7 +169,8 @@ def _cpa(rel_pos, rel_vel):
 
 def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_vor0, r_safe, r_tol, gamma_max,
                          theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear,
-                         v_ship_min, r_guard, lam_guard, d_att_floor=None):
+                         v_ship_min, r_guard, lam_guard, d_att_floor=None, r_cq=None, d_cq=None,
+                         dpsi_cq=None):
     """Per-neighbour quantities of :func:`colregs_vortex` (each a 1×M row unless stated).
 
     Keys: ``gamma`` (bearing from the planned course), ``d``, ``ship`` (1 for a moving neighbour), ``head_on``,
@@ -148,8 +178,9 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     stand-on ship acts alone, 17(a)(ii)/(b)), ``act`` (``act_alone`` or a give-way escalation), ``weight``
     (strength of the escape term), ``escape`` (2×M unit escape directions), ``k_vor`` (give-way vortex
     strength), ``threat`` (1 where the Rule 8 minimum alteration applies), ``guard`` (radial push strength),
-    ``avoid`` (1 where the neighbour is being avoided). ``d_att_floor`` is accepted so that
-    :meth:`ColregsVortexParams.as_dict` can be passed whole; only :func:`colregs_vortex` uses it.
+    ``avoid`` (1 where the neighbour is being avoided). ``d_att_floor``, ``r_cq``, ``d_cq`` and ``dpsi_cq`` are
+    accepted so that :meth:`ColregsVortexParams.as_dict` can be passed whole; only :func:`colregs_vortex` uses
+    them.
 
     Parameters
     ----------
@@ -173,7 +204,7 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
         COLREG thresholds of :class:`ColregsVortexParams` (meaning, units and ranges there).
     dpsi_min, d_clear, v_ship_min, r_guard, lam_guard : float
         The remaining COLREG thresholds of :class:`ColregsVortexParams`.
-    d_att_floor : float, optional
+    d_att_floor, r_cq, d_cq, dpsi_cq : float, optional
         Ignored here (see above).
 
     Returns
@@ -252,7 +283,9 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     escape = escape / ca.repmat(ca.fmax(ca.sqrt(ca.sum1(escape * escape)), 1e-9), 2, 1)
 
     giveway = 1 - stand_on
-    k_vor = giveway * mv["k_vor"]
+    # a static obstacle is circled only while the range closes: once it opens the ship is past it (without this
+    # the vortex can hold the ship in an orbit about an obstacle when the goal is far and its sink weak)
+    k_vor = giveway * mv["k_vor"] * (ship + (1 - ship) * (mv["v_r"] < 0))
     threat = ship * closing * ((giveway * (1 - astern) * (dcpa < d_clear) + act) > 0)
     guard = lam_guard * ca.fmax(0, 1 / d - 1 / r_guard)  # radial push away inside r_guard, whatever the rules
     avoid = ((k_vor != 0) + act + threat + (d < r_guard)) > 0
@@ -263,13 +296,14 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
 
 def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink, k_vor0, r_safe, r_tol,
                    gamma_max, theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear,
-                   v_ship_min, r_guard, lam_guard, d_att_floor):
+                   v_ship_min, r_guard, lam_guard, d_att_floor, r_cq=0.0, d_cq=3.0, dpsi_cq=math.pi / 4,
+                   n_candidates=80):
     """Desired-heading vector of ``colregs-vortex`` (2×1; its direction is the desired heading).
 
     Sink at the goal (strength capped while avoiding), the modified vortex at every active give-way ship, the
     escape term of every ship the own ship acts for, the Rule 8 minimum alteration, then the modified vortex
-    of static obstacles and the close-range guard; see the module docstring. ``active`` (1×M, 0/1) masks
-    neighbours as in :mod:`mmg_casadi.fields`.
+    of static obstacles and the close-range guard, and finally the close-quarters filter of its heading; see the
+    module docstring. ``active`` (1×M, 0/1) masks neighbours as in :mod:`mmg_casadi.fields`.
 
     Parameters
     ----------
@@ -299,6 +333,16 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
         The remaining COLREG thresholds of :class:`ColregsVortexParams`.
     d_att_floor : float
         While anything is avoided, the goal attracts at most as strongly as from this distance (L, ≥ 0).
+    r_cq : float
+        Close-quarters range of the heading filter (L, ≥ 0; 0, the default here, disables it).
+    d_cq : float
+        Combined radius of the filter's collision cones (L, > 0).
+    dpsi_cq : float
+        The filter judges the heading the ship turns through next, at most this far from its own on the way to
+        the field's (rad, (0, π]).
+    n_candidates : int
+        Candidate headings of the filter's velocity obstacle (evenly spread; the closed loop passes the layout's
+        ``vo_candidates``).
 
     Returns
     -------
@@ -347,4 +391,17 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
     ships = ca.sqrt(ca.sumsqr(ships)) * ca.vertcat(ca.cos(psi_s), ca.sin(psi_s))
     vor_static = ca.sum2(vortex(own_pos, nb_pos, active * (1 - t["ship"]) * t["k_vor"]))
     rep = ca.sum2((ca.repmat(own_pos, 1, m) - nb_pos) * ca.repmat(active * t["guard"] / t["d"], 2, 1))
-    return ships + vor_static + rep
+    out = ships + vor_static + rep
+    # close quarters: keep the field's heading unless it leads into the cone of something within r_cq
+    close = active * (t["d"] < r_cq)
+    psi_f = ca.atan2(out[1], out[0])
+    # the heading the ship turns through next: at most dpsi_cq from its own on the way to the field's
+    psi_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_cq), dpsi_cq)
+    speed = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
+    ok = heading_feasible(own_pos, speed, psi_next, nb_pos, nb_vel, close, collision_distance=d_cq)
+    psi_pref = own_psi + dpsi_min  # a readily apparent alteration to starboard (Rule 8) is preferred
+    e_pref = ca.vertcat(ca.cos(psi_pref), ca.sin(psi_pref))
+    psi_vo = velocity_obstacle(own_pos, speed, own_pos + e_pref, nb_pos, nb_vel, close, collision_distance=d_cq,
+                               n_candidates=n_candidates, current_heading=own_psi)
+    psi_out = ca.if_else(ok, psi_f, psi_vo)
+    return ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_out), ca.sin(psi_out))

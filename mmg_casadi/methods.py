@@ -126,7 +126,7 @@ def _colregs_vortex(g: GuidanceInputs):
     return colregs_vortex.colregs_vortex(
         g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active, lam_sink=P["lam_sink"], k_vor0=P["k_vor0"],
         r_safe=P["r_safe"], r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"],
-        **{k: P[f"cv_{k}"] for k in _CV_FIELDS})
+        n_candidates=g.layout.vo_candidates, **{k: P[f"cv_{k}"] for k in _CV_FIELDS})
 
 
 def _velocity_obstacle(g: GuidanceInputs):

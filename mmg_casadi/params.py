@@ -221,6 +221,15 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("cv_d_att_floor", 15.0, 0.0, None, "L", "while anything is avoided the goal attracts at most as from this "
        "distance (the paper's near-goal failure)", "our choice: R_safe, the range at which avoidance starts",
        "colregs-vortex"),
+    _P("cv_r_cq", 8.0, 0.0, None, "L", "range within which a neighbour's collision cone filters the heading "
+       "(Rule 17(b) close quarters; 0 disables)", "our choice: cv_r_act's 8 L, the range at which the stand-on ship "
+       "acts whatever the TCPA", "colregs-vortex"),
+    _P("cv_d_cq", 3.0, 0.0, None, "L", "combined radius of those collision cones (linear velocity obstacle, Huang "
+       "et al. 2018)", "our choice: 1.5 × the 2 L collision distance, as cv_d_cpa_act", "colregs-vortex",
+       low_open=True),
+    _P("cv_dpsi_cq_deg", 45.0, 0.0, 180.0, "deg", "the filter judges the heading the ship turns through next, at most "
+       "this far from its own on the way to the field's", "our choice: about the KCS's turn in half of cv_t_close; "
+       "beyond 10° of heading error the PD's rudder is saturated anyway", "colregs-vortex", low_open=True),
     # channel walls
     _P("wall_lam", 10.0, 0.0, None, "L²/(L/U)", "line-source strength of a channel wall",
        "paper §Narrow Waterways (Λ = 10)", "walls"),

@@ -16,7 +16,9 @@ from mmg_casadi.scenario_run import run_scenario
 
 CV = ColregsVortexParams()
 MV_KW = dict(lam_sink=-100.0, k_vor0=-10.0, r_safe=15.0, r_tol=2.0, gamma_max=5 * math.pi / 8)
-KW = MV_KW | CV.as_dict()
+# the rules alone: the close-quarters filter, which may depart from them within r_cq (Rule 2(b) / 17(b)), is
+# tested in test_colregs_vortex_close_quarters.py
+KW = MV_KW | CV.as_dict() | {"r_cq": 0.0}
 OWN = dict(own_pos=[0.0, 0.0], own_psi=0.0, own_vel=[1.0, 0.0])
 FAR_GOAL = [50.0, 0.0]
 
