@@ -581,9 +581,7 @@ def _dispatch_args(layout: Layout, g: GuidanceInputs) -> list:
             ca.vertcat(*[g.P[k] for k in _method_scalars(layout)])]
 
 
-_DISPATCH: dict = {}
-
-
+@functools.lru_cache(maxsize=None)
 def _within_range(layout: Layout, method: str, m: int) -> ca.Function:
     """Never-inlined Function ``(k, pos, vel, psi, speed, goal, nb_pos, nb_vel, nb_radius, active, held, P)``
     → the method's 2×1 vector, evaluating the method on the ``k`` active neighbours only (gathered in their
@@ -591,9 +589,6 @@ def _within_range(layout: Layout, method: str, m: int) -> ca.Function:
     active and no walls it returns (1, 0) without evaluating the method (the step does not read it). Exact only
     because every method ignores an inactive neighbour (a masked term adds an exact zero; a test checks each
     registered method)."""
-    key = (layout, method, m)
-    if key in _DISPATCH:
-        return _DISPATCH[key]
     spec = methods.get(method)
     names = _method_scalars(layout)
     sym = [ca.SX.sym("pos", 2), ca.SX.sym("vel", 2), ca.SX.sym("psi"), ca.SX.sym("speed"), ca.SX.sym("goal", 2),
@@ -631,10 +626,8 @@ def _within_range(layout: Layout, method: str, m: int) -> ca.Function:
         cases[0] = ca.Function(f"{method.replace('-', '')}_{layout.key()}_m{m}_idle", sym, [ca.DM([1.0, 0.0])])
     cond = ca.Function.conditional(f"within_{method.replace('-', '')}_{layout.key()}_m{m}", cases, branch(m))
     xm = [ca.MX.sym(f"a{n}", *cond.size_in(n)) for n in range(cond.n_in())]
-    f = ca.Function(f"within_range_{method.replace('-', '')}_{layout.key()}_m{m}", xm, [cond(*xm)],
-                    {"never_inline": True})
-    _DISPATCH[key] = f
-    return f
+    return ca.Function(f"within_range_{method.replace('-', '')}_{layout.key()}_m{m}", xm, [cond(*xm)],
+                       {"never_inline": True})
 
 
 def _check_sparse(layout: Layout) -> None:
