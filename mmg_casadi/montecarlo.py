@@ -319,11 +319,11 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
     if own["collision_time"] is not None:
         j, ships = own["collision_with"], scenario.ships
         if j < len(ships):
-            h = math.radians(ships[j].heading_deg)
+            h = ships[j].heading_rad
             other, vel = ships[j].start, (ships[j].speed * math.cos(h), ships[j].speed * math.sin(h))
         else:
             other, vel = obstacles[j - len(ships)], (0.0, 0.0)
-        unavoidable = unavoidable_at_start(ships[0].start, math.radians(ships[0].heading_deg), ships[0].speed,
+        unavoidable = unavoidable_at_start(ships[0].start, ships[0].heading_rad, ships[0].speed,
                                            other, vel, collision_distance=float(P["collision_distance"]),
                                            rudder_deg=float(P["delta_max_deg"]))
     mech = failure_mechanism(row["failure"], collision_time=own["collision_time"],
