@@ -27,7 +27,7 @@ PAPER_RUNS_PER_CELL = 5000
 
 WORKLOAD = r"""
 import inspect, json, sys, time
-import mmg_casadi.montecarlo as mc
+import mmg_casadi.montecarlo.study as mc
 env, method, n, seed = int(sys.argv[1]), sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 params = json.loads(sys.argv[5])
 kw = {"params": params} if "params" in inspect.signature(mc.run_batch).parameters else {}

@@ -2,7 +2,7 @@
 
 For every method (inverse-square, sink-vortex, modified-vortex, velocity-obstacle) and a scenario of 2, 6 or 14
 ships (so each ship has 1, 5 or 13 neighbours, all inside R_safe), the natively compiled guidance Function
-(:func:`mmg_casadi.simulation.compiled_guidance`: reactive field / velocity obstacle, ILOS and PD for every ship)
+(:func:`mmg_casadi.closed_loop.simulation.compiled_guidance`: reactive field / velocity obstacle, ILOS and PD for every ship)
 is mapped over many scenario states and timed; the time is divided by the number of states and ships. Printed
 in nanoseconds and as a ratio to inverse-square with 1 neighbour (the paper's "computation effort" panel). Every
 neighbour is within R_safe, so this is the worst case of the guidance the rollouts run (which evaluates a method
@@ -24,11 +24,11 @@ import time
 
 import numpy as np
 
-from mmg_casadi.closed_loop import Layout, default_globals, initial_state, pack_params
-from mmg_casadi.methods import AVOIDING
-from mmg_casadi.model import propeller_rpm_for_speed
-from mmg_casadi.montecarlo import time_guidance
-from mmg_casadi.simulation import compiled_guidance
+from mmg_casadi.closed_loop.step import Layout, default_globals, initial_state, pack_params
+from mmg_casadi.guidance.methods import AVOIDING
+from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
+from mmg_casadi.montecarlo.study import time_guidance
+from mmg_casadi.closed_loop.simulation import compiled_guidance
 
 METHODS = AVOIDING
 

@@ -13,15 +13,15 @@ Examples
 (3.5, True)
 """
 
-from .closed_loop import ClosedLoopModel, Layout, Problem, build_problem
-from .maneuvers import turning_circle, zigzag
-from .methods import METHODS
-from .model import linearise
-from .montecarlo import run_study
-from .params import PARAMETERS, load_file as load_params, resolve as resolve_params
-from .scenario import Scenario, load_scenario
-from .scenario_run import ScenarioResult, packaged_scenario, run_scenario
-from .simulation import Trajectory, simulate
+from mmg_casadi.closed_loop.step import ClosedLoopModel, Layout, Problem, build_problem
+from mmg_casadi.vessel.maneuvers import turning_circle, zigzag
+from mmg_casadi.guidance.methods import METHODS
+from mmg_casadi.vessel.mmg import linearise
+from mmg_casadi.montecarlo.study import run_study
+from mmg_casadi.params import PARAMETERS, load_file as load_params, resolve as resolve_params
+from mmg_casadi.scenarios.scenario import Scenario, load_scenario
+from mmg_casadi.scenarios.run import ScenarioResult, packaged_scenario, run_scenario
+from mmg_casadi.closed_loop.simulation import Trajectory, simulate
 
 __all__ = [
     "ClosedLoopModel", "Layout", "METHODS", "PARAMETERS", "Problem", "Scenario", "ScenarioResult", "Trajectory",

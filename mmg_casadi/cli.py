@@ -18,10 +18,10 @@ import sys
 import tomllib
 from pathlib import Path
 
-from . import methods as registry
-from .errors import InputError
-from .io import write_json
-from .params import PARAMETERS, check_value, help_text, load_file, markdown_table
+from mmg_casadi.guidance import methods as registry
+from mmg_casadi.errors import InputError
+from mmg_casadi.io import write_json
+from mmg_casadi.params import PARAMETERS, check_value, help_text, load_file, markdown_table
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
 STUDIES = QUICK_STUDIES + ("imazu", "disturbance", "statistics", "sweep", "paper", "all")
@@ -200,8 +200,8 @@ def _params_of(a) -> dict | None:
 
 
 def _maneuver(a) -> dict:
-    from .maneuvers import turning_circle, validate_maneuver_args, zigzag
-    from .plotting import plot_maneuver
+    from mmg_casadi.vessel.maneuvers import turning_circle, validate_maneuver_args, zigzag
+    from mmg_casadi.plotting import plot_maneuver
     validate_maneuver_args(a.kind)
     if a.kind == "turning":
         r = turning_circle(a.rudder, port=a.port, speed=a.speed)
@@ -217,10 +217,10 @@ def _maneuver(a) -> dict:
 
 
 def _simulate(a) -> dict:
-    from .scenario import load_scenario, with_method
-    from .scenario_run import run_scenario
+    from mmg_casadi.scenarios.scenario import load_scenario, with_method
+    from mmg_casadi.scenarios.run import run_scenario
     if a.file.suffix.lower() == ".json":
-        from .interchange import load_traffic_situation
+        from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
         sc = load_traffic_situation(a.file)[0]
     else:
         sc = load_scenario(a.file)
@@ -244,7 +244,7 @@ def _study(a) -> dict:
         if n != "waypoint-square" and getattr(a, "methods", None):
             kw["methods"] = a.methods
         if n == "statistics":
-            from .disturbance_sampling import parse_range
+            from mmg_casadi.montecarlo.disturbance_sampling import parse_range
             kw.update(runs=a.runs, envs=a.envs, base_seed=a.seed, backend=a.backend, address=a.address,
                       workers=a.workers, current=a.current and parse_range(a.current, "current"),
                       wind=a.wind and parse_range(a.wind, "wind"))
@@ -266,7 +266,7 @@ def _tune(a) -> dict:
         from tuning import cli_pd
         return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn, tracking_tolerance=a.tracking_tolerance)
     from tuning import cli_apf
-    from .sampling import parse_envs
+    from mmg_casadi.montecarlo.sampling import parse_envs
     envs = tuple(parse_envs(a.holdout_envs))
     return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a), envs=envs,
                        target=(5,) if 5 in envs else envs[-1:], starts=a.starts, grid=a.grid,
@@ -274,7 +274,7 @@ def _tune(a) -> dict:
 
 
 def _convert(a) -> dict:
-    from .interchange import convert_file
+    from mmg_casadi.scenarios.maritime_schema import convert_file
     return convert_file(a.file, a.out, method=a.method, target_method=a.target_method,
                         length_scale=a.length_scale, reference=a.reference)
 
@@ -300,7 +300,7 @@ def main(argv=None) -> int:
     argv : list of str, optional
         Command-line arguments without the program name (default ``sys.argv[1:]``).
     """
-    from .signals import exit_status, signal_name, terminate_as_interrupt
+    from mmg_casadi.signals import exit_status, signal_name, terminate_as_interrupt
     parser = build_parser()
     a = None
     try:

@@ -1,8 +1,8 @@
 """The parameter table: one declaration per parameter of the closed loop (default, range, unit, meaning, source).
 
 Everything else is derived from :data:`PARAMETERS`: the defaults and range checks of the parameter dataclasses
-(:class:`~mmg_casadi.guidance.IlosParams`, :class:`~mmg_casadi.control.PdHeadingParams`, the field parameter
-classes of :mod:`mmg_casadi.fields`), the keys a scenario file's ``[settings]`` table and a ``--params`` file
+(:class:`~mmg_casadi.guidance.ilos.IlosParams`, :class:`~mmg_casadi.guidance.heading_control.PdHeadingParams`, the field parameter
+classes of :mod:`mmg_casadi.guidance.fields`), the keys a scenario file's ``[settings]`` table and a ``--params`` file
 accept, the CLI help, the README table (:func:`markdown_table`) and the resolved parameter set every run writes
 into its outputs (:func:`resolve`).
 
@@ -27,7 +27,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from .errors import InputError, ParameterError, check_range
+from mmg_casadi.errors import InputError, ParameterError, check_range
 
 GROUPS = ("simulation", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "colregs-vortex",
           "walls", "velocity-obstacle", "outcome", "environment")
@@ -61,7 +61,7 @@ class Param:
     choices : tuple of str
         Allowed values of a ``"choice"``.
     structural : bool
-        Changes the shape of the compiled closed loop (a :class:`~mmg_casadi.closed_loop.Layout` field) rather
+        Changes the shape of the compiled closed loop (a :class:`~mmg_casadi.closed_loop.step.Layout` field) rather
         than a numeric input of it.
     """
 
@@ -190,7 +190,7 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("gamma_max_deg", 112.5, 0.0, 180.0, "deg", "largest |relative bearing γ| at which the vortex acts",
        "COLREG Rule 13: the 112.5° that leaves the stern sector (22.5° abaft the beam) without vortex",
        "modified-vortex", low_open=True),
-    # colregs-vortex (the modified vortex plus Rules 8, 13 and 17; mmg_casadi.colregs_vortex)
+    # colregs-vortex (the modified vortex plus Rules 8, 13 and 17; mmg_casadi.guidance.colregs_vortex)
     _P("cv_theta_head_on_deg", 22.5, 0.0, 90.0, "deg", "head-on tolerance on the bearing and on the course "
        "difference from reciprocal", "the paper laboratory's head-on sector 7π/8–9π/8 of relative heading",
        "colregs-vortex", low_open=True, high_open=True),
@@ -255,15 +255,15 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "our choice: where the sink's pull |Λ|/r_g (Λ = −100) still beats the modified vortex f|K⁰|/d at the "
        "collision distance d = 2 L with f = 2 (K⁰ = −10): r_g < 10 L (paper §Limitations, 2nd mechanism)",
        "outcome", low_open=True),
-    # environment (calm water by default, as in the paper; see mmg_casadi.environment)
+    # environment (calm water by default, as in the paper; see mmg_casadi.vessel.environment)
     _P("current_speed", 0.0, 0.0, 1.0, "U", "speed of a uniform current (fraction of the design speed)",
-       "our choice: calm water as in the paper; model Fossen 2021 §10.3 (mmg_casadi.environment)",
+       "our choice: calm water as in the paper; model Fossen 2021 §10.3 (mmg_casadi.vessel.environment)",
        "environment"),
     _P("current_direction_deg", 0.0, -360.0, 360.0, "deg", "direction the current flows TOWARDS (from x "
        "towards y)", "our choice", "environment"),
     _P("wind_speed", 0.0, 0.0, 60.0, "m/s", "true wind speed (the model takes it over U_des = 12.347 m/s)",
        "our choice: calm air as in the paper; loads Blendermann 1994, KCS windage our estimate "
-       "(mmg_casadi.environment)", "environment"),
+       "(mmg_casadi.vessel.environment)", "environment"),
     _P("wind_direction_deg", 0.0, -360.0, 360.0, "deg", "direction the wind comes FROM (from x towards y)",
        "our choice", "environment"),
     _P("crab_compensation", "off", None, None, "", "'on': ILOS steers ψ_d = χ_d − β with the measured crab "

@@ -154,7 +154,7 @@ def plot_maneuver(result, path=None) -> Figure:
 
     Parameters
     ----------
-    result : mmg_casadi.maneuvers.ManeuverResult
+    result : mmg_casadi.vessel.maneuvers.ManeuverResult
         Result of the manoeuvre simulation.
     path : str or path-like, optional
         File to save the figure to.
@@ -245,12 +245,12 @@ def plot_paths(result, ax, *, title=None):
 
 def plot_scenario(result, path=None, *, title=None) -> Figure:
     """Paths (:func:`plot_paths`); rudder command vs actual; distance between agents while inside R_safe with
-    the collision threshold. ``result`` is a :class:`~mmg_casadi.scenario_run.ScenarioResult`; the figure is
+    the collision threshold. ``result`` is a :class:`~mmg_casadi.scenarios.run.ScenarioResult`; the figure is
     saved to ``path`` when given.
 
     Parameters
     ----------
-    result : mmg_casadi.scenario_run.ScenarioResult
+    result : mmg_casadi.scenarios.run.ScenarioResult
         Result of the scenario run.
     path : str or path-like, optional
         File to save the figure to.
@@ -300,7 +300,7 @@ def plot_tracking(result, path=None) -> Figure:
 
     Parameters
     ----------
-    result : mmg_casadi.scenario_run.ScenarioResult
+    result : mmg_casadi.scenarios.run.ScenarioResult
         Result of the waypoint-tracking run.
     path : str or path-like, optional
         File to save the figure to.

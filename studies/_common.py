@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from mmg_casadi import methods as registry
+from mmg_casadi.guidance import methods as registry
 from mmg_casadi.io import write_json
 from mmg_casadi.params import resolve
 from mmg_casadi.plotting import COLORS, draw_circle, draw_goal, draw_path, marine_axes
-from mmg_casadi.scenario import with_method
-from mmg_casadi.scenario_run import run_scenario, write_outputs
+from mmg_casadi.scenarios.scenario import with_method
+from mmg_casadi.scenarios.run import run_scenario, write_outputs
 
 ALL_METHODS = tuple(m for m in registry.AVOIDING)
 """Every avoiding method of the registry."""

@@ -7,7 +7,7 @@ Overtaking: the paper gives no positions; the overtaken ship runs at half speed 
 
 from __future__ import annotations
 
-from mmg_casadi.encounters import colregs_cases
+from mmg_casadi.scenarios.encounters import colregs_cases
 
 from ._common import ALL_METHODS, run_cases
 
@@ -20,7 +20,7 @@ def run(out, *, methods=None, params=None) -> dict:
     out : str or Path
         Output directory: ``<case>/<method>/`` per run, ``<case>.png`` per case, ``metrics.json``.
     methods : iterable of str, optional
-        Methods to compare (names in :data:`mmg_casadi.methods.METHODS`); default: every avoiding method.
+        Methods to compare (names in :data:`mmg_casadi.guidance.methods.METHODS`); default: every avoiding method.
     params : dict, optional
         Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`) for every run.
 

@@ -4,7 +4,7 @@
 
 from __future__ import annotations
 
-from mmg_casadi.encounters import conflict_cases
+from mmg_casadi.scenarios.encounters import conflict_cases
 
 from ._common import APF_AND_VO, run_cases
 
@@ -17,7 +17,7 @@ def run(out, *, methods=None, params=None) -> dict:
     out : str or Path
         Output directory: ``<case>/<method>/`` per run, ``<case>.png`` per case, ``metrics.json``.
     methods : iterable of str, optional
-        Methods to compare (names in :data:`mmg_casadi.methods.METHODS`); default: the paper's APFs and the VO.
+        Methods to compare (names in :data:`mmg_casadi.guidance.methods.METHODS`); default: the paper's APFs and the VO.
     params : dict, optional
         Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`) for every run.
 

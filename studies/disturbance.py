@@ -4,7 +4,7 @@ current and a beam wind.
 ``mmg-casadi study disturbance [--current V] [--wind W] [--methods m,...] [--params P.toml] --out DIR``. "Beam"
 is perpendicular to the own ship's initial heading, both disturbances setting it to starboard: the current flows
 towards heading + 90°, the wind comes from heading - 90°. Defaults: current 0.1 U_des, wind 15 m/s (1.21 U_des).
-The model is :mod:`mmg_casadi.environment`: guidance sees velocities over the ground, ILOS and the waypoint
+The model is :mod:`mmg_casadi.vessel.environment`: guidance sees velocities over the ground, ILOS and the waypoint
 switching positions, so the ILOS integral is what compensates the drift (crab-angle compensation off).
 
 Cases:
@@ -32,13 +32,13 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from mmg_casadi.encounters import colregs_cases, waypoint_square
+from mmg_casadi.scenarios.encounters import colregs_cases, waypoint_square
 from mmg_casadi.io import write_json
 from mmg_casadi.errors import InputError
 from mmg_casadi.params import check_value, resolve
 from mmg_casadi.plotting import COLORS, draw_path, marine_axes
-from mmg_casadi.scenario import scenario_from_dict, with_params
-from mmg_casadi.scenario_run import run_scenario, write_outputs
+from mmg_casadi.scenarios.scenario import scenario_from_dict, with_params
+from mmg_casadi.scenarios.run import run_scenario, write_outputs
 
 from ._common import run_cases
 

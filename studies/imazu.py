@@ -1,4 +1,4 @@
-"""The 22 Imazu encounters (:mod:`mmg_casadi.imazu`), own ship with each method, targets holding course or
+"""The 22 Imazu encounters (:mod:`mmg_casadi.scenarios.imazu`), own ship with each method, targets holding course or
 avoiding with the same method: per case own-ship safety, closest approach and the own ship's COLREG rule verdicts.
 
 ``mmg-casadi study imazu [--targets hold|avoid|both] [--methods a,b] [PARAMS] --out DIR`` writes
@@ -10,8 +10,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from mmg_casadi import methods as registry
-from mmg_casadi.imazu import CASES, plot_imazu, run_imazu
+from mmg_casadi.guidance import methods as registry
+from mmg_casadi.scenarios.imazu import CASES, plot_imazu, run_imazu
 from mmg_casadi.io import write_json
 from mmg_casadi.params import resolve
 

@@ -5,7 +5,7 @@ within 2 L, 5 L either side of the diagonal (``data/scenarios/narrow_channel.tom
 
 from __future__ import annotations
 
-from mmg_casadi.encounters import narrow_channel_cases
+from mmg_casadi.scenarios.encounters import narrow_channel_cases
 
 from ._common import APF_AND_VO, run_cases
 
@@ -20,7 +20,7 @@ def run(out, *, methods=None, params=None) -> dict:
     out : str or Path
         Output directory: ``<case>/<method>/`` per run, ``<case>.png`` per case, ``metrics.json``.
     methods : iterable of str, optional
-        Methods to compare (names in :data:`mmg_casadi.methods.METHODS`); default: the paper's APFs and the VO.
+        Methods to compare (names in :data:`mmg_casadi.guidance.methods.METHODS`); default: the paper's APFs and the VO.
     params : dict, optional
         Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`) for every run.
 

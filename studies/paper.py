@@ -28,13 +28,13 @@ import math
 import sys
 from pathlib import Path
 
-from mmg_casadi.comparisons import compare_methods
+from mmg_casadi.montecarlo.comparisons import compare_methods
 from mmg_casadi.errors import InputError
 from mmg_casadi.io import write_json
-from mmg_casadi.methods import PAPER_STATISTICS
-from mmg_casadi.montecarlo import run_study
-from mmg_casadi.results import ResultsTable
-from mmg_casadi.sampling import parse_envs
+from mmg_casadi.guidance.methods import PAPER_STATISTICS
+from mmg_casadi.montecarlo.study import run_study
+from mmg_casadi.montecarlo.results import ResultsTable
+from mmg_casadi.montecarlo.sampling import parse_envs
 
 from . import colregs, conflict, narrow_channel, static_obstacle, waypoint_square
 
@@ -233,7 +233,7 @@ def evaluate_claims(quick: dict, summary_rows: list, rows: list) -> list[dict]:
         ``metrics.json`` of the quick studies by name: ``waypoint-square``, ``static-obstacle``, ``colregs``,
         ``conflict``, ``narrow-channel``.
     summary_rows : list of dict
-        ``rows`` of the :class:`mmg_casadi.results.Summary` of the statistical analysis.
+        ``rows`` of the :class:`mmg_casadi.montecarlo.results.Summary` of the statistical analysis.
     rows : list of dict
         Its run rows (for the paired comparisons and the failure mechanisms).
 

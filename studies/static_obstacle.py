@@ -6,7 +6,7 @@ the paper's sink-vortex failure mode (its coordinates are not given).
 
 from __future__ import annotations
 
-from mmg_casadi.encounters import static_obstacle_cases
+from mmg_casadi.scenarios.encounters import static_obstacle_cases
 
 from ._common import ALL_METHODS, run_cases
 
@@ -19,7 +19,7 @@ def run(out, *, methods=None, params=None) -> dict:
     out : str or Path
         Output directory: ``<case>/<method>/`` per run, ``<case>.png`` per case, ``metrics.json``.
     methods : iterable of str, optional
-        Methods to compare (names in :data:`mmg_casadi.methods.METHODS`); default: every avoiding method.
+        Methods to compare (names in :data:`mmg_casadi.guidance.methods.METHODS`); default: every avoiding method.
     params : dict, optional
         Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`) for every run.
 

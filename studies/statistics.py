@@ -1,7 +1,7 @@
 """The paper's statistical analysis (section "Statistical Analysis"): random encounters in five environments.
 
 ``mmg-casadi study statistics [--runs N] [--envs 1-5] [--methods a,b] [--params P.toml] [--backend local|ray]
-[--address A] [--workers W] [--seed S] [--current LO-HI] [--wind LO-HI] --out DIR`` runs (or resumes) :func:`mmg_casadi.montecarlo.run_study`:
+[--address A] [--workers W] [--seed S] [--current LO-HI] [--wind LO-HI] --out DIR`` runs (or resumes) :func:`mmg_casadi.montecarlo.study.run_study`:
 ``N`` runs per environment and method (the paper: 5000), by default for the modified sink-vortex APF, the
 inverse-square APF and the velocity obstacle. Outputs in ``DIR``: ``runs.csv``, ``study.json``, ``summary.csv``,
 ``summary.md``, ``statistics.png``, ``metrics.json`` and ``failures/*.toml`` (replayable with
@@ -14,12 +14,12 @@ import sys
 from pathlib import Path
 
 from mmg_casadi.io import json_safe
-from mmg_casadi.montecarlo import DEFAULT_METHODS, run_study
+from mmg_casadi.montecarlo.study import DEFAULT_METHODS, run_study
 
 
 def run(out, *, runs: int = 200, envs="1-5", methods=None, base_seed: int = 0, params=None,
         backend: str = "local", address=None, workers=None, current=None, wind=None) -> dict:
-    """Run the study (see :func:`mmg_casadi.montecarlo.run_study`); returns the config, parameters and summary.
+    """Run the study (see :func:`mmg_casadi.montecarlo.study.run_study`); returns the config, parameters and summary.
 
     Parameters
     ----------
@@ -30,7 +30,7 @@ def run(out, *, runs: int = 200, envs="1-5", methods=None, base_seed: int = 0, p
     envs : str or iterable of int
         Environments, e.g. ``"1-5"`` or ``(1, 3)``.
     methods : iterable of str, optional
-        Methods (default: :data:`mmg_casadi.montecarlo.DEFAULT_METHODS`).
+        Methods (default: :data:`mmg_casadi.montecarlo.study.DEFAULT_METHODS`).
     base_seed : int
         Base seed of the scenario sampler.
     params : dict, optional

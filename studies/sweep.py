@@ -1,10 +1,10 @@
 """One parameter swept over values in the statistics study, every value paired against a baseline value.
 
 ``mmg-casadi study sweep --param NAME --values v1,v2,... [--baseline V] [--runs N] [--envs 5] [--methods ...]
-[--seed S] [--workers W] --out DIR`` runs :func:`mmg_casadi.montecarlo.run_study` once per value (into
+[--seed S] [--workers W] --out DIR`` runs :func:`mmg_casadi.montecarlo.study.run_study` once per value (into
 ``DIR/NAME=VALUE``, resumable) on the *same* sampled scenarios (same environments, runs and seed), so each
 value is compared with the baseline (default: the parameter's table default) run by run: the success rates
-with the exact McNemar test and Newcombe's interval of the difference (:func:`mmg_casadi.stats.paired_comparison`),
+with the exact McNemar test and Newcombe's interval of the difference (:func:`mmg_casadi.montecarlo.stats.paired_comparison`),
 CE and MCTE as means over each value's successful runs and as paired differences over the runs where both
 succeeded (:func:`tuning.judge.paired_mean`). Outputs: ``DIR/metrics.json``, ``DIR/sweep.csv``,
 ``DIR/sweep.md`` and ``DIR/sweep.png`` (success with 95 % intervals and failure counts per value).
@@ -23,14 +23,14 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from mmg_casadi import methods as registry
+from mmg_casadi.guidance import methods as registry
 from mmg_casadi.errors import InputError
 from mmg_casadi.io import write_json
-from mmg_casadi.montecarlo import run_study
+from mmg_casadi.montecarlo.study import run_study
 from mmg_casadi.params import PARAMETERS, check_value
-from mmg_casadi.results import FAILURES, ResultsTable
-from mmg_casadi.sampling import parse_envs
-from mmg_casadi.stats import paired_comparison, wilson
+from mmg_casadi.montecarlo.results import FAILURES, ResultsTable
+from mmg_casadi.montecarlo.sampling import parse_envs
+from mmg_casadi.montecarlo.stats import paired_comparison, wilson
 
 DEFAULT_METHODS = ("modified-vortex",)
 
@@ -108,7 +108,7 @@ def run(out, *, param: str, values, baseline=None, runs: int = 200, envs="5", me
     workers : int, optional
         Local worker processes.
     backend : {"local", "ray"}
-        Executor of :func:`~mmg_casadi.montecarlo.run_study`.
+        Executor of :func:`~mmg_casadi.montecarlo.study.run_study`.
     address : str, optional
         Ray address.
     """

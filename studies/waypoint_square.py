@@ -1,7 +1,7 @@
 """Waypoint tracking on a square (paper, section "Waypoint Tracking"): ILOS + PD, CE and MCTE.
 
 The paper does not give the square's size; we use a 25 L square starting at the origin, heading north, with
-four waypoints (the last one back at the start; :func:`mmg_casadi.encounters.waypoint_square`).
+four waypoints (the last one back at the start; :func:`mmg_casadi.scenarios.encounters.waypoint_square`).
 Paper: CE = 0.1203, MCTE = 0.2655 L.
 """
 
@@ -10,9 +10,9 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from mmg_casadi.encounters import SQUARE_SIDE, waypoint_square
+from mmg_casadi.scenarios.encounters import SQUARE_SIDE, waypoint_square
 from mmg_casadi.io import write_json
-from mmg_casadi.scenario_run import run_scenario, write_outputs
+from mmg_casadi.scenarios.run import run_scenario, write_outputs
 
 PAPER = {"ce": 0.1203, "mcte": 0.2655}
 

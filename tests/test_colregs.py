@@ -1,4 +1,4 @@
-"""COLREG bookkeeping (mmg_casadi.colregs) on hand-built trajectories."""
+"""COLREG bookkeeping (mmg_casadi.colregs.classify) on hand-built trajectories."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from mmg_casadi.colregs import (
+from mmg_casadi.colregs.classify import (
     ENCOUNTERS,
     ColregProfile,
     PairAssessment,

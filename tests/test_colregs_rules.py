@@ -1,4 +1,4 @@
-"""Rule-by-rule COLREG verdicts (mmg_casadi.colregs_score) on hand-built trajectories.
+"""Rule-by-rule COLREG verdicts (mmg_casadi.colregs.score) on hand-built trajectories.
 
 Ships sail at unit speed (1 L per unit of time) unless stated. The crossing: give-way ship a from (0, 0)
 heading 0 (towards +x), stand-on ship b from (25, 25) heading -90 deg (towards -y); on unchanged courses
@@ -14,8 +14,8 @@ import math
 import numpy as np
 import pytest
 
-from mmg_casadi.colregs import ColregProfile, assess_pair, classify_encounter, get_profile
-from mmg_casadi.colregs_score import RULES, cpa_tcpa, score_pair, stand_on_should_act
+from mmg_casadi.colregs.classify import ColregProfile, assess_pair, classify_encounter, get_profile
+from mmg_casadi.colregs.score import RULES, cpa_tcpa, score_pair, stand_on_should_act
 from mmg_casadi.errors import InputError, ParameterError
 
 T = np.arange(0.0, 80.0 + 1e-9, 0.1)
@@ -287,7 +287,7 @@ def test_no_encounter_has_no_verdicts():
 
 
 def test_lab_tcpa_thresholds_bracket_the_kcs_turning_times():
-    from mmg_casadi.maneuvers import turning_circle
+    from mmg_casadi.vessel.maneuvers import turning_circle
     r = turning_circle(35.0, t_end=40.0)
     psi = np.degrees(r.state("psi"))
     t30, t60 = (float(np.interp(d, psi, r.t)) for d in (30.0, 60.0))

@@ -7,12 +7,12 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop import default_globals
-from mmg_casadi.colregs_vortex import ColregsVortexParams, colregs_vortex, colregs_vortex_terms
+from mmg_casadi.closed_loop.step import default_globals
+from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams, colregs_vortex, colregs_vortex_terms
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.fields import heading_of, modified_vortex
-from mmg_casadi.scenario import load_scenario, scenario_from_dict, with_method
-from mmg_casadi.scenario_run import run_scenario
+from mmg_casadi.guidance.fields import heading_of, modified_vortex
+from mmg_casadi.scenarios.scenario import load_scenario, scenario_from_dict, with_method
+from mmg_casadi.scenarios.run import run_scenario
 
 CV = ColregsVortexParams()
 MV_KW = dict(lam_sink=-100.0, k_vor0=-10.0, r_safe=15.0, r_tol=2.0, gamma_max=5 * math.pi / 8)

@@ -8,9 +8,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from mmg_casadi.colregs_vortex import ColregsVortexParams, colregs_vortex
-from mmg_casadi.fields import heading_of
-from mmg_casadi.velocity_obstacle import heading_feasible
+from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams, colregs_vortex
+from mmg_casadi.guidance.fields import heading_of
+from mmg_casadi.guidance.velocity_obstacle import heading_feasible
 
 CV = ColregsVortexParams()
 KW = dict(lam_sink=-100.0, k_vor0=-10.0, r_safe=15.0, r_tol=2.0, gamma_max=5 * math.pi / 8) | CV.as_dict()
@@ -99,7 +99,7 @@ def test_symbolic_function_matches_numeric_call_with_the_filter_acting():
     ("r_cq", "cv_r_cq", -1.0, -1.0), ("d_cq", "cv_d_cq", 0.0, 0.0), ("dpsi_cq", "cv_dpsi_cq_deg", 0.0, 0.0),
     ("dpsi_cq", "cv_dpsi_cq_deg", 4.0, math.degrees(4.0))])
 def test_filter_parameters_are_range_checked(field, name, value, table_value):
-    from mmg_casadi.closed_loop import default_globals
+    from mmg_casadi.closed_loop.step import default_globals
     from mmg_casadi.errors import ParameterError
     with pytest.raises(ParameterError, match=name):
         ColregsVortexParams(**{field: value})

@@ -6,8 +6,8 @@ import math
 import casadi as ca
 import pytest
 
-from mmg_casadi.colregs_vortex import ColregsVortexParams, colregs_vortex
-from mmg_casadi.fields import heading_of, modified_vortex
+from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams, colregs_vortex
+from mmg_casadi.guidance.fields import heading_of, modified_vortex
 
 MV_KW = dict(lam_sink=-100.0, k_vor0=-10.0, r_safe=15.0, r_tol=2.0, gamma_max=5 * math.pi / 8)
 KW = MV_KW | ColregsVortexParams().as_dict() | {"r_cq": 0.0}

@@ -1,4 +1,4 @@
-"""PD heading control (mmg_casadi.control)."""
+"""PD heading control (mmg_casadi.guidance.heading_control)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import casadi as ca
 import pytest
 
-from mmg_casadi.control import PdHeadingParams, heading_error, pd_heading
+from mmg_casadi.guidance.heading_control import PdHeadingParams, heading_error, pd_heading
 from mmg_casadi.errors import ParameterError
 
 D35 = math.radians(35.0)

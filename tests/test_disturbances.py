@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pytest
 
-from mmg_casadi.environment import (CONTAINER_SHIP_LOADED, NENV, Environment, Windage, blendermann_coefficients,
+from mmg_casadi.vessel.environment import (CONTAINER_SHIP_LOADED, NENV, Environment, Windage, blendermann_coefficients,
                                     crab_angle, ground_velocity, gust_speeds, velocity_over_ground,
                                     wind_forces)
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.model import (NX, build_cvodes, build_mmg, build_rk4_step, linearise, mass_matrix,
+from mmg_casadi.vessel.mmg import (NX, build_cvodes, build_mmg, build_rk4_step, linearise, mass_matrix,
                               propeller_rpm_for_speed)
-from mmg_casadi.ship import load_kcs
+from mmg_casadi.vessel.ship import load_kcs
 
 KCS = load_kcs()
 N_RPM = propeller_rpm_for_speed(1.0)

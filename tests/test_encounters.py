@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from mmg_casadi.cli import main
-from mmg_casadi.scenario import with_method
-from mmg_casadi import encounters
-from mmg_casadi.closed_loop import build_problem
-from mmg_casadi.scenario_run import assess, run_scenario
+from mmg_casadi.scenarios.scenario import with_method
+from mmg_casadi.scenarios import encounters
+from mmg_casadi.closed_loop.step import build_problem
+from mmg_casadi.scenarios.run import assess, run_scenario
 from studies import narrow_channel
 
 static_obstacle, colregs, conflict = (encounters.static_obstacle_cases, encounters.colregs_cases,

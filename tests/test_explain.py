@@ -8,16 +8,16 @@ import pytest
 from scipy.stats import binomtest
 
 from mmg_casadi.cli import main
-from mmg_casadi.closed_loop import build_problem
-from mmg_casadi.comparisons import COMPARISON_COLUMNS, compare_methods, read_csv
-from mmg_casadi.compliance import own_ship_compliance
-from mmg_casadi.encounters import colregs_cases
+from mmg_casadi.closed_loop.step import build_problem
+from mmg_casadi.montecarlo.comparisons import COMPARISON_COLUMNS, compare_methods, read_csv
+from mmg_casadi.colregs.compliance import own_ship_compliance
+from mmg_casadi.scenarios.encounters import colregs_cases
 from mmg_casadi.errors import InputError
-from mmg_casadi.montecarlo import run_scenarios, run_study
-from mmg_casadi.results import RUN_COLUMNS, ResultsTable, summarize
-from mmg_casadi.scenario import scenario_from_dict, with_method
-from mmg_casadi.scenario_run import run_scenario
-from mmg_casadi.simulation import simulate, simulate_batch_history
+from mmg_casadi.montecarlo.study import run_scenarios, run_study
+from mmg_casadi.montecarlo.results import RUN_COLUMNS, ResultsTable, summarize
+from mmg_casadi.scenarios.scenario import scenario_from_dict, with_method
+from mmg_casadi.scenarios.run import run_scenario
+from mmg_casadi.closed_loop.simulation import simulate, simulate_batch_history
 
 
 def _head_on(offset, method="none"):

@@ -5,11 +5,11 @@ import math
 import pytest
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.failures import MECHANISMS, failure_mechanism, turn_time_90, unavoidable_at_start
-from mmg_casadi.maneuvers import turning_circle
-from mmg_casadi.montecarlo import run_scenarios
-from mmg_casadi.results import MECHANISMS as RESULT_MECHANISMS
-from mmg_casadi.scenario import scenario_from_dict
+from mmg_casadi.montecarlo.failures import MECHANISMS, failure_mechanism, turn_time_90, unavoidable_at_start
+from mmg_casadi.vessel.maneuvers import turning_circle
+from mmg_casadi.montecarlo.study import run_scenarios
+from mmg_casadi.montecarlo.results import MECHANISMS as RESULT_MECHANISMS
+from mmg_casadi.scenarios.scenario import scenario_from_dict
 
 GOALS = [[50.0, 0.0], [0.0, 0.0], [0.0, 50.0]]
 

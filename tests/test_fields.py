@@ -1,4 +1,4 @@
-"""Tests of the APF desired-heading vector fields (mmg_casadi.fields)."""
+"""Tests of the APF desired-heading vector fields (mmg_casadi.guidance.fields)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pytest
 from scipy.optimize import brentq
 
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.fields import (
+from mmg_casadi.guidance.fields import (
     InverseSquareParams,
     ModifiedVortexParams,
     SinkVortexParams,

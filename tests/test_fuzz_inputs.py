@@ -2,7 +2,7 @@
 
 Whatever the input — random TOML values and types, wrong shapes, NaN/inf, huge numbers, unicode, dates,
 missing and extra keys, text that is not TOML at all — loading either succeeds with a valid scenario (it
-passes the validation-only :func:`~mmg_casadi.closed_loop.build_problem` and survives a dump/load round trip)
+passes the validation-only :func:`~mmg_casadi.closed_loop.step.build_problem` and survives a dump/load round trip)
 or raises the project's :class:`~mmg_casadi.errors.InputError` with a one-line message; and the CLI exits
 with status 2 and writes nothing. No simulation runs here (inputs the CLI would accept are skipped).
 
@@ -22,8 +22,8 @@ from hypothesis import strategies as st
 
 from mmg_casadi.cli import main
 from mmg_casadi.errors import InputError
-from mmg_casadi.interchange import traffic_situation_to_scenario
-from mmg_casadi.scenario import (
+from mmg_casadi.scenarios.maritime_schema import traffic_situation_to_scenario
+from mmg_casadi.scenarios.scenario import (
     OBSTACLE_KEYS,
     SETTINGS_KEYS,
     SHIP_KEYS,
@@ -34,7 +34,7 @@ from mmg_casadi.scenario import (
     load_scenario,
     scenario_from_dict,
 )
-from mmg_casadi.closed_loop import build_problem
+from mmg_casadi.closed_loop.step import build_problem
 from mmg_casadi.params import load_file as load_params_file
 
 FAST = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow,
@@ -113,8 +113,8 @@ point = st.tuples(finite, finite).map(list)
 @st.composite
 def plausible_scenarios(draw):
     """Scenarios of 1-4 ships with values of the right types (mostly in range), obstacles and walls."""
-    from mmg_casadi.methods import NAMES as METHODS
-    from mmg_casadi.scenario import PARAM_KEYS
+    from mmg_casadi.guidance.methods import NAMES as METHODS
+    from mmg_casadi.scenarios.scenario import PARAM_KEYS
     settings_ = {"method": draw(st.sampled_from(METHODS))}
     for key, strat in (("dt", st.floats(0.01, 2.5)), ("t_max", st.floats(1.0, 1e4)),
                        ("r_safe", st.floats(0.1, 50)), ("collision_distance", st.floats(0.1, 3)),

@@ -1,8 +1,8 @@
 """A colregs-vortex ship that passes its goal outside the acceptance radius turns back to it; the paper's methods
 keep the paper's ILOS (the extended last leg)."""
 
-from mmg_casadi.scenario import scenario_from_dict
-from mmg_casadi.scenario_run import run_scenario
+from mmg_casadi.scenarios.scenario import scenario_from_dict
+from mmg_casadi.scenarios.run import run_scenario
 
 
 def _offset_goal(method):

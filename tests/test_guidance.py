@@ -1,4 +1,4 @@
-"""ILOS guidance and waypoint switching (mmg_casadi.guidance)."""
+"""ILOS guidance and waypoint switching (mmg_casadi.guidance.ilos)."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from mmg_casadi.control import pd_heading
+from mmg_casadi.guidance.heading_control import pd_heading
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.guidance import (
+from mmg_casadi.guidance.ilos import (
     IlosParams,
     ilos_heading,
     ilos_integrator_rate,

@@ -7,8 +7,8 @@ import pytest
 from matplotlib.figure import Figure
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.imazu import CASES, imazu_case, plot_imazu, run_imazu
-from mmg_casadi.scenario import scenario_from_dict
+from mmg_casadi.scenarios.imazu import CASES, imazu_case, plot_imazu, run_imazu
+from mmg_casadi.scenarios.scenario import scenario_from_dict
 
 # Imazu's problems as encoded in MarWaltz/TUD_RL tud_rl/envs/_envs/Imazu.py (after Sawada et al. 2021):
 # case -> number of targets; cases 1-4 have one target ship, 5-12 two, 13-22 three.

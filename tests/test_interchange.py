@@ -13,7 +13,7 @@ import pytest
 
 from mmg_casadi.cli import main
 from mmg_casadi.errors import InputError
-from mmg_casadi.interchange import (
+from mmg_casadi.scenarios.maritime_schema import (
     KNOT,
     LocalPlane,
     _ecef,
@@ -22,7 +22,7 @@ from mmg_casadi.interchange import (
     scenario_to_traffic_situation,
     traffic_situation_to_scenario,
 )
-from mmg_casadi.scenario import Scenario, Settings, ShipSpec, load_scenario
+from mmg_casadi.scenarios.scenario import Scenario, Settings, ShipSpec, load_scenario
 
 EXAMPLE = files("mmg_casadi") / "data" / "traffic_situation.json"
 L = 230.0

@@ -1,4 +1,4 @@
-"""Tracking metrics (mmg_casadi.metrics)."""
+"""Tracking metrics (mmg_casadi.closed_loop.metrics)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.metrics import (
+from mmg_casadi.closed_loop.metrics import (
     TrackingMetrics,
     control_effort,
     mean_cross_track_error,

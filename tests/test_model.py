@@ -6,10 +6,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from mmg_casadi.maneuvers import IMO, turning_circle, zigzag
-from mmg_casadi.model import (NX, build_cvodes, build_mmg, build_rk4_step, linearise,
+from mmg_casadi.vessel.maneuvers import IMO, turning_circle, zigzag
+from mmg_casadi.vessel.mmg import (NX, build_cvodes, build_mmg, build_rk4_step, linearise,
                               propeller_rpm_for_speed)
-from mmg_casadi.ship import derived_masses, load_kcs, load_reference, load_steering
+from mmg_casadi.vessel.ship import derived_masses, load_kcs, load_reference, load_steering
 
 KCS = load_kcs()
 PAPER_TABLE_2 = {"m": 0.182280, "mx": 0.006269, "my": 0.155164, "Izz": 0.011432, "Jzz": 0.009268}
@@ -147,7 +147,7 @@ def test_steering_gear_limits():
     assert X[6, -1] == pytest.approx(math.radians(35), abs=1e-4)
     # rate limit: 5 deg/s full scale = 1.6256 rad per unit time; a slow gear (T = 0.1) hits it
     import dataclasses
-    from mmg_casadi.ship import SteeringParams
+    from mmg_casadi.vessel.ship import SteeringParams
     fast = build_mmg(steering=SteeringParams(T_delta=0.1))
     xd = np.array(fast([1, 0, 0, 0, 0, 0, 0], math.radians(35), n)).ravel()
     assert xd[6] == pytest.approx(st.rate_max_nd(KCS), rel=1e-12)

@@ -12,10 +12,10 @@ import math
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop import NS, S_, ClosedLoopModel, Layout, initial_state
+from mmg_casadi.closed_loop.step import NS, S_, ClosedLoopModel, Layout, initial_state
 from mmg_casadi.params import resolve
 from mmg_casadi.errors import InputError
-from mmg_casadi.montecarlo import (
+from mmg_casadi.montecarlo.study import (
     TIMING_COLUMNS,
     BatchTask,
     LocalExecutor,
@@ -27,10 +27,10 @@ from mmg_casadi.montecarlo import (
     run_study,
     sampled_scenario,
 )
-from mmg_casadi.results import RUN_COLUMNS, ResultsTable
-from mmg_casadi.sampling import sample_scenario
-from mmg_casadi.scenario import scenario_from_dict
-from mmg_casadi.scenario_run import run_scenario
+from mmg_casadi.montecarlo.results import RUN_COLUMNS, ResultsTable
+from mmg_casadi.montecarlo.sampling import sample_scenario
+from mmg_casadi.scenarios.scenario import scenario_from_dict
+from mmg_casadi.scenarios.run import run_scenario
 
 METHOD = "modified-vortex"
 RUNS = [0, 1, 2, 3]
@@ -212,9 +212,9 @@ def test_classify_stalled_diverged_from_final_state():
 
 def _own_mcte_from_states(res):
     """Own-ship MCTE of a run_scenario trajectory with y_e re-evaluated by the step at every stored state."""
-    from mmg_casadi.metrics import tracking_metrics
-    from mmg_casadi.closed_loop import build_problem
-    from mmg_casadi.simulation import compiled_step
+    from mmg_casadi.closed_loop.metrics import tracking_metrics
+    from mmg_casadi.closed_loop.step import build_problem
+    from mmg_casadi.closed_loop.simulation import compiled_step
     pr = build_problem(res.scenario)
     layout, p, g = pr.layout, pr.p, pr.model.values
     tr = res.trajectory
@@ -241,7 +241,7 @@ def test_batch_ce_mcte_agree_with_run_scenario(reference_rows):
         reached = [s for s in res.metrics["ships"] if s["reached_goal"]]
         assert row["fleet_ce"] == pytest.approx(np.mean([s["ce"] for s in reached]), rel=1e-12)
         # check against the trajectory definition (trapezoid of |delta| and |y_e| up to the goal)
-        from mmg_casadi.metrics import tracking_metrics
+        from mmg_casadi.closed_loop.metrics import tracking_metrics
         tr = res.trajectory
         ref = tracking_metrics(tr.t[:-1], tr.state("delta", 0)[:-1], tr.auxiliary("y_e", 0),
                                tr.state("status", 0)[1:] == 1, delta_max=math.radians(35.0))
@@ -286,7 +286,7 @@ def test_cli_statistics(tmp_path, capsys):
 
 
 def test_one_study_per_output_directory(tmp_path):
-    from mmg_casadi.montecarlo import _exclusive
+    from mmg_casadi.montecarlo.study import _exclusive
     with _exclusive(tmp_path):
         with pytest.raises(InputError) as err:
             run_study(tmp_path, runs=1, envs="1", methods=(METHOD,), workers=1, progress=False)
@@ -294,8 +294,8 @@ def test_one_study_per_output_directory(tmp_path):
 
 
 def test_scenarios_with_different_horizons_share_a_batch():
-    from mmg_casadi.scenario import scenario_from_dict
-    from mmg_casadi.montecarlo import run_scenarios
+    from mmg_casadi.scenarios.scenario import scenario_from_dict
+    from mmg_casadi.montecarlo.study import run_scenarios
 
     def sc(t_max):
         return scenario_from_dict({"settings": {"method": "none", "t_max": t_max},

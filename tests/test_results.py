@@ -9,8 +9,8 @@ import math
 import pytest
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.plot_statistics import plot_statistics
-from mmg_casadi.results import (
+from mmg_casadi.montecarlo.plots import plot_statistics
+from mmg_casadi.montecarlo.results import (
     RUN_COLUMNS,
     SUMMARY_COLUMNS,
     ResultsTable,

@@ -1,4 +1,4 @@
-"""Property and reproducibility tests of the paper's scenario sampler (mmg_casadi.sampling)."""
+"""Property and reproducibility tests of the paper's scenario sampler (mmg_casadi.montecarlo.sampling)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.sampling import ENVIRONMENTS, SampledScenario, SamplerConfig, parse_envs, sample_scenario
+from mmg_casadi.montecarlo.sampling import ENVIRONMENTS, SampledScenario, SamplerConfig, parse_envs, sample_scenario
 
 N_SEEDS = 500
 

@@ -1,4 +1,4 @@
-"""Scenario files (mmg_casadi.scenario)."""
+"""Scenario files (mmg_casadi.scenarios.scenario)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ from importlib.resources import files
 import pytest
 
 from mmg_casadi.errors import InputError, ScenarioError
-from mmg_casadi.methods import NAMES as METHODS
-from mmg_casadi.scenario import (
+from mmg_casadi.guidance.methods import NAMES as METHODS
+from mmg_casadi.scenarios.scenario import (
     ObstacleSpec,
     Scenario,
     Settings,

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from mmg_casadi.montecarlo import TIMING_COLUMNS, BatchTask, LocalExecutor, RayExecutor, run_batch
-from mmg_casadi.results import RUN_COLUMNS, ResultsTable
+from mmg_casadi.montecarlo.study import TIMING_COLUMNS, BatchTask, LocalExecutor, RayExecutor, run_batch
+from mmg_casadi.montecarlo.results import RUN_COLUMNS, ResultsTable
 from mmg_casadi.signals import Terminated, exit_status, terminate_as_interrupt
 
 METHOD = "inverse-square"

@@ -1,7 +1,7 @@
 """The sparse closed-loop step (what rollouts compile) gives exactly the dense step's next state.
 
 The sparse step skips ships that do not sail and shows each method only its neighbours within R_safe
-(:func:`mmg_casadi.closed_loop.build_closed_loop_step`, ``sparse=True``). Random scenario states — ships spread
+(:func:`mmg_casadi.closed_loop.step.build_closed_loop_step`, ``sparse=True``). Random scenario states — ships spread
 from all-within-R_safe to far apart, some finished (staying or not), some diverged — exercise every branch
 (no, 1, 2, 3–4 and more active neighbours); both steps are evaluated by CasADi's virtual machine, no compiling.
 """
@@ -14,11 +14,11 @@ import math
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop import (NS, S_, Layout, build_closed_loop_step, build_guidance, default_globals,
+from mmg_casadi.closed_loop.step import (NS, S_, Layout, build_closed_loop_step, build_guidance, default_globals,
                                     initial_state, pack_params)
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.methods import AVOIDING
-from mmg_casadi.model import propeller_rpm_for_speed
+from mmg_casadi.guidance.methods import AVOIDING
+from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
 
 
 def _states(layout: Layout, count: int, seed: int):

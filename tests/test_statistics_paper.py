@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from mmg_casadi.montecarlo import run_study
+from mmg_casadi.montecarlo.study import run_study
 from studies import paper
 
 pytestmark = pytest.mark.slow

@@ -5,7 +5,7 @@ import pytest
 from scipy.stats import binomtest
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.stats import paired_comparison, wilson
+from mmg_casadi.montecarlo.stats import paired_comparison, wilson
 
 
 def test_mcnemar_uses_only_discordant_runs():

@@ -10,7 +10,7 @@ import pytest
 
 from mmg_casadi.cli import main
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.model import STATE_NAMES, linearise, propeller_rpm_for_speed
+from mmg_casadi.vessel.mmg import STATE_NAMES, linearise, propeller_rpm_for_speed
 from tuning.linear import fit_nomoto_step, nomoto_first_order, nomoto_second_order, yaw_subsystem
 from tuning.pd import (PdSpec, analyse_gains, design_pd, grid_step_metrics, paper_gains_map, place_pair,
                        verify_nonlinear)

@@ -1,4 +1,4 @@
-"""Tests of the constant-speed linear velocity obstacle baseline (mmg_casadi.velocity_obstacle)."""
+"""Tests of the constant-speed linear velocity obstacle baseline (mmg_casadi.guidance.velocity_obstacle)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.velocity_obstacle import VelocityObstacleParams, velocity_obstacle, velocity_obstacle_terms
+from mmg_casadi.guidance.velocity_obstacle import VelocityObstacleParams, velocity_obstacle, velocity_obstacle_terms
 
 VO = asdict(VelocityObstacleParams())
 N = VO["n_candidates"]
@@ -135,7 +135,7 @@ def test_parameter_validation():
 # Equivalence with the direct (trigonometric) implementation that the module keeps for its fallback
 # ---------------------------------------------------------------------------------------------------------------
 
-from mmg_casadi.velocity_obstacle import (  # noqa: E402
+from mmg_casadi.guidance.velocity_obstacle import (  # noqa: E402
     _velocity_obstacle_reference as _reference_velocity_obstacle,
 )
 

@@ -6,12 +6,12 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop import NS, SHIP_STATE, S_, Layout, initial_state
-from mmg_casadi.encounters import colregs_cases
+from mmg_casadi.closed_loop.step import NS, SHIP_STATE, S_, Layout, initial_state
+from mmg_casadi.scenarios.encounters import colregs_cases
 from mmg_casadi.params import PARAMETERS, resolve
-from mmg_casadi.scenario import with_method
-from mmg_casadi.scenario_run import run_scenario
-from mmg_casadi.velocity_obstacle import heading_feasible, hold_heading
+from mmg_casadi.scenarios.scenario import with_method
+from mmg_casadi.scenarios.run import run_scenario
+from mmg_casadi.guidance.velocity_obstacle import heading_feasible, hold_heading
 
 KW = {"collision_distance": 2.0, "cone": "huang"}
 
@@ -90,6 +90,6 @@ def test_closed_loop_changes_its_vo_heading_only_when_it_became_forbidden(case):
 def test_without_neighbours_the_memory_follows_the_heading():
     d = {"settings": {"method": "velocity-obstacle", "t_max": 20.0},
          "ships": [{"name": "own", "start": [0.0, 0.0], "heading": 30.0, "speed": 1.0, "waypoints": [[60.0, 0.0]]}]}
-    from mmg_casadi.scenario import scenario_from_dict
+    from mmg_casadi.scenarios.scenario import scenario_from_dict
     tr = run_scenario(scenario_from_dict(d)).trajectory
     assert np.allclose(tr.state("vo_heading", 0)[1:], tr.state("psi", 0)[1:])

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from mmg_casadi.cli import main
-from mmg_casadi.closed_loop import S_, Layout, default_globals, initial_state, pack_params
+from mmg_casadi.closed_loop.step import S_, Layout, default_globals, initial_state, pack_params
 from mmg_casadi.errors import InputError, ParameterError
-from mmg_casadi.model import propeller_rpm_for_speed
-from mmg_casadi.scenario import scenario_from_dict
-from mmg_casadi.scenario_run import run_scenario
-from mmg_casadi.simulation import simulate
-from mmg_casadi.encounters import waypoint_square as square_scenario
+from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
+from mmg_casadi.scenarios.scenario import scenario_from_dict
+from mmg_casadi.scenarios.run import run_scenario
+from mmg_casadi.closed_loop.simulation import simulate
+from mmg_casadi.scenarios.encounters import waypoint_square as square_scenario
 from studies.waypoint_square import PAPER
 
 
@@ -109,7 +109,7 @@ def test_invalid_gains_exit_2_naming_the_field(tmp_path, capsys, args, field):
 
 def test_fewer_than_two_waypoints_is_an_error():
     with pytest.raises(ParameterError, match="waypoints"):
-        from mmg_casadi.guidance import validate_waypoints
+        from mmg_casadi.guidance.ilos import validate_waypoints
         validate_waypoints([(0.0, 0.0)])
     with pytest.raises(InputError, match=r"ships\[0\].waypoints"):
         scenario_from_dict({"settings": {"method": "none"},
@@ -149,7 +149,7 @@ def test_ship_circling_without_progress_is_reported_stalled():
 
 def test_aux_history_is_per_ship_for_several_ships():
     """The recorded cross-track error of each ship equals the one recomputed from its own states."""
-    from mmg_casadi.guidance import path_errors
+    from mmg_casadi.guidance.ilos import path_errors
     d = {"settings": {"method": "modified-vortex", "t_max": 60.0},
          "ships": [{"name": "a", "start": [0, 0], "heading": 0.0, "speed": 1.0, "waypoints": [[50, 0]]},
                    {"name": "b", "start": [50, 1], "heading": 180.0, "speed": 0.6, "waypoints": [[0, 1]]},

@@ -41,7 +41,7 @@ Observations that shape the problem (see :func:`tune` and the report):
   units chatters and CE grows by 2–88 % (static obstacle 0.145 → 0.228, head-on 0.155 → 0.189, crossing ship 1
   0.139 → 0.193, conflict ship 2 0.090 → 0.169). With dt = 0.25 the horizon cap of 300 steps is T = 75: the
   long scenarios (overtaking, conflict, most samples) are truncated after their main encounters.
-* Derivatives: the natively compiled steps of :mod:`mmg_casadi.compiled` have no derivatives, so the rollout
+* Derivatives: the natively compiled steps of :mod:`mmg_casadi.closed_loop.compiled` have no derivatives, so the rollout
   uses the SX step in CasADi's virtual machine (``step.mapaccum``, an MX graph); the objective with its
   gradient costs ~10–170 ms per scenario of ≤ 300 steps. CasADi's own ``jit`` of the NLP functions
   (``TuningConfig.jit``) makes IPOPT 6.5x faster but its compilation (gcc -O1 of the functions and their
@@ -62,11 +62,11 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.closed_loop import AUX, GLOBAL_PARAMS, NS, S_, Layout, build_closed_loop_step
+from mmg_casadi.closed_loop.step import AUX, GLOBAL_PARAMS, NS, S_, Layout, build_closed_loop_step
 from mmg_casadi.errors import InputError
-from mmg_casadi.sampling import sample_scenario
-from mmg_casadi.scenario import scenario_from_dict, with_method
-from mmg_casadi.scenario_run import build_problem
+from mmg_casadi.montecarlo.sampling import sample_scenario
+from mmg_casadi.scenarios.scenario import scenario_from_dict, with_method
+from mmg_casadi.scenarios.run import build_problem
 
 THETA = ("k_vor0", "lam_sink", "r_safe")
 """Tuned parameters, in the order of θ."""
@@ -167,9 +167,9 @@ class TuningConfig:
 
 
 def paper_encounters() -> dict:
-    """The paper's encounters used for training (:func:`mmg_casadi.encounters.paper_encounters`), all with the
+    """The paper's encounters used for training (:func:`mmg_casadi.scenarios.encounters.paper_encounters`), all with the
     modified sink-vortex."""
-    from mmg_casadi.encounters import paper_encounters as cases
+    from mmg_casadi.scenarios.encounters import paper_encounters as cases
     return {k: with_method(v, METHOD) for k, v in cases().items()}
 
 
@@ -179,7 +179,7 @@ def sampled_scenario(env: int, run: int, base_seed: int):
     Parameters
     ----------
     env : int
-        Monte Carlo environment (1-5, :func:`mmg_casadi.sampling.sample_scenario`).
+        Monte Carlo environment (1-5, :func:`mmg_casadi.montecarlo.sampling.sample_scenario`).
     run : int
         Run index within the environment.
     base_seed : int
@@ -281,7 +281,7 @@ def prepare_case(name: str, sc, config: TuningConfig = TuningConfig()) -> Traini
     config : TuningConfig
         Settings of the smoothed training problem.
     """
-    from mmg_casadi.simulation import simulate
+    from mmg_casadi.closed_loop.simulation import simulate
     pr = build_problem(sc, dict(zip(THETA, PAPER)))
     layout, x0, p = pr.layout, pr.x0, pr.p
     g = pr.model.values
@@ -725,7 +725,7 @@ def evaluate(param_sets: dict, *, envs=(1, 2, 3, 4, 5), runs: int = 40, base_see
              report=_stderr) -> dict:
     """Exact closed loop on the held-out scenarios: for every environment, ``runs`` scenarios drawn with
     ``base_seed`` and every parameter set of ``param_sets`` (name -> {k_vor0, lam_sink, r_safe}) in one batch
-    (:func:`mmg_casadi.simulation.simulate_batch`). Returns ``{env: {name: summary}}`` with success rate and
+    (:func:`mmg_casadi.closed_loop.simulation.simulate_batch`). Returns ``{env: {name: summary}}`` with success rate and
     its Wilson 95 % interval, failures by kind, and mean CE / MCTE of the own ship over its successful runs.
 
     Parameters
@@ -741,9 +741,9 @@ def evaluate(param_sets: dict, *, envs=(1, 2, 3, 4, 5), runs: int = 40, base_see
     report : callable, optional
         Takes one progress line; None for silence.
     """
-    from mmg_casadi.montecarlo import classify
-    from mmg_casadi.results import wilson_interval
-    from mmg_casadi.simulation import simulate_batch
+    from mmg_casadi.montecarlo.study import classify
+    from mmg_casadi.montecarlo.results import wilson_interval
+    from mmg_casadi.closed_loop.simulation import simulate_batch
     if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
         raise InputError("holdout", "an integer >= 1", runs)
     out = {}
@@ -801,7 +801,7 @@ def exact_training(scenarios: dict, params: dict, w_mcte: float = TuningConfig.w
     w_mcte : float
         Weight of MCTE against CE in the objective.
     """
-    from mmg_casadi.scenario_run import run_scenario
+    from mmg_casadi.scenarios.run import run_scenario
     out, total = {}, 0.0
     for name, sc in scenarios.items():
         m = run_scenario(sc, dict(params)).metrics

@@ -8,7 +8,7 @@ Stages (progress with ETA on stderr; interrupt and rerun with the same ``--out``
    cached on disk), gradient check against central differences on the paper's encounters;
 3. the search (:func:`tuning.search.search`): the paper's values and a ``--grid``² sweep of the box, then
    L-BFGS-B from the best ``--starts`` points, every evaluation kept in ``DIR/evaluations.jsonl``;
-4. the statistics study (:func:`mmg_casadi.montecarlo.run_study`) of the paper's and the tuned values on
+4. the statistics study (:func:`mmg_casadi.montecarlo.study.run_study`) of the paper's and the tuned values on
    ``--holdout`` runs per environment with the held-out seed :data:`tuning.apf.HOLDOUT_SEED`
    (``DIR/heldout/paper``, ``DIR/heldout/tuned``; resumable), judged by :func:`tuning.judge.judge`.
 
@@ -29,7 +29,7 @@ from pathlib import Path
 from mmg_casadi.errors import InputError
 from mmg_casadi.io import write_json
 from mmg_casadi.params import PARAMETERS, resolve
-from mmg_casadi.scenario import with_params
+from mmg_casadi.scenarios.scenario import with_params
 
 from . import apf, judge, safety, search
 
@@ -109,8 +109,8 @@ def heldout(out, sets: dict, *, runs: int, envs, base_seed: int, workers=None) -
     workers : int, optional
         Local worker processes.
     """
-    from mmg_casadi.montecarlo import run_study
-    from mmg_casadi.results import ResultsTable
+    from mmg_casadi.montecarlo.study import run_study
+    from mmg_casadi.montecarlo.results import ResultsTable
     res = {}
     for name, params in sets.items():
         d = Path(out) / name

@@ -1,7 +1,7 @@
 """Judge a parameter set against a baseline on paired Monte Carlo runs (the statistics study's ``runs.csv``).
 
 Both sets run the same sampled scenarios (same environments, runs and seed), so each environment gives paired
-success vectors: :func:`mmg_casadi.stats.paired_comparison` (exact McNemar p-value, Newcombe interval of the
+success vectors: :func:`mmg_casadi.montecarlo.stats.paired_comparison` (exact McNemar p-value, Newcombe interval of the
 difference). CE and MCTE are compared on the runs where *both* sets succeeded (paired differences, mean with a
 normal 95 % interval), since their means over each set's own successes compare different scenario mixes.
 
@@ -32,7 +32,7 @@ import math
 import numpy as np
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.stats import paired_comparison, wilson
+from mmg_casadi.montecarlo.stats import paired_comparison, wilson
 
 Z_95 = 1.959963984540054
 
@@ -137,7 +137,7 @@ def outcomes_from_rows(rows, method: str) -> dict:
     Parameters
     ----------
     rows : list of dict
-        Rows of :class:`mmg_casadi.results.ResultsTable`.
+        Rows of :class:`mmg_casadi.montecarlo.results.ResultsTable`.
     method : str
         The method whose rows are used.
     """

@@ -1,7 +1,7 @@
 """Linear yaw dynamics of the MMG model about straight running, and Nomoto models from them.
 
 The ship plus steering gear is linearised with CasADi's exact Jacobians
-(:func:`mmg_casadi.model.linearise`) about straight running at a fraction ``speed`` of the design speed, the
+(:func:`mmg_casadi.vessel.mmg.linearise`) about straight running at a fraction ``speed`` of the design speed, the
 propeller turning at the self-propulsion rpm for that speed. At straight running the surge equation decouples
 from the yaw subsystem (the Jacobian entries coupling ``u`` with ``v``, ``r``, ``delta`` and the
 ``n_rpm`` column of the yaw rows are exactly zero, see :attr:`YawModel.surge_coupling`), and nothing in the sway
@@ -38,8 +38,8 @@ import numpy as np
 from scipy.optimize import curve_fit
 
 from mmg_casadi.errors import ParameterError, check_range
-from mmg_casadi.model import STATE_NAMES, build_cvodes, build_mmg, linearise, propeller_rpm_for_speed
-from mmg_casadi.ship import load_kcs, load_steering
+from mmg_casadi.vessel.mmg import STATE_NAMES, build_cvodes, build_mmg, linearise, propeller_rpm_for_speed
+from mmg_casadi.vessel.ship import load_kcs, load_steering
 
 YAW_STATES = ("v", "r", "psi", "delta")
 SIDES = ("port", "starboard", "mean")

@@ -46,11 +46,11 @@ import control as ct
 import numpy as np
 from matplotlib.figure import Figure
 
-from mmg_casadi.compiled import compile_function
-from mmg_casadi.control import pd_heading
+from mmg_casadi.closed_loop.compiled import compile_function
+from mmg_casadi.guidance.heading_control import pd_heading
 from mmg_casadi.errors import ParameterError, check_range
-from mmg_casadi.model import NX, STATE_NAMES, build_mmg, propeller_rpm_for_speed, rk4
-from mmg_casadi.ship import load_kcs, load_steering
+from mmg_casadi.vessel.mmg import NX, STATE_NAMES, build_mmg, propeller_rpm_for_speed, rk4
+from mmg_casadi.vessel.ship import load_kcs, load_steering
 
 from .linear import YawModel, nomoto_first_order, yaw_subsystem
 
@@ -925,8 +925,8 @@ def waypoint_square(kp: float, kd: float) -> dict:
     kd : float
         Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
     """
-    from mmg_casadi.encounters import waypoint_square as square_scenario
-    from mmg_casadi.scenario_run import run_scenario
+    from mmg_casadi.scenarios.encounters import waypoint_square as square_scenario
+    from mmg_casadi.scenarios.run import run_scenario
     own = run_scenario(square_scenario(), params={"kp": float(kp), "kd": float(kd)}).metrics["ships"][0]
     return {"ce": own["ce"], "mcte": own["mcte"], "status": own["status"], "time_to_goal": own["time_to_goal"]}
 

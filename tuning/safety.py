@@ -18,7 +18,7 @@ Monte Carlo study counts — while CE and MCTE are small secondary terms that br
 
 Gradients are exact: the rollout carries forward sensitivities. One *augmented step*
 ``z = [x; acc; ∂x/∂θ; ∂acc/∂θ] ↦ z⁺`` is built symbolically (CasADi forward AD, ``jtimes`` with one
-direction per tuned parameter), compiled to native code once per layout (disk cache of :mod:`mmg_casadi.compiled`),
+direction per tuned parameter), compiled to native code once per layout (disk cache of :mod:`mmg_casadi.closed_loop.compiled`),
 ``map``-ped over the scenarios of a layout and ``mapaccum``-ed over steps in chunks; the soft-min, softplus
 and normalisations are applied in closed form to the final accumulators and their sensitivities.
 
@@ -45,10 +45,10 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.closed_loop import AUX, GLOBAL_PARAMS, NS, S_, Layout, build_closed_loop_step
-from mmg_casadi.compiled import compile_function
+from mmg_casadi.closed_loop.step import AUX, GLOBAL_PARAMS, NS, S_, Layout, build_closed_loop_step
+from mmg_casadi.closed_loop.compiled import compile_function
 from mmg_casadi.errors import InputError, check_range
-from mmg_casadi.scenario_run import build_problem
+from mmg_casadi.scenarios.run import build_problem
 
 THETA = ("k_vor0", "r_safe")
 """Tuned parameters, in the order of θ (Λ_sink is held at the paper's value, see the module docstring)."""
@@ -303,8 +303,8 @@ def prepare_case(name: str, sc, config: SafetyConfig = SafetyConfig()) -> Safety
     config : SafetyConfig
         ``dt``, ``max_steps``, ``horizon_margin``, ``smooth``.
     """
-    from mmg_casadi.montecarlo import classify
-    from mmg_casadi.simulation import simulate_batch
+    from mmg_casadi.montecarlo.study import classify
+    from mmg_casadi.closed_loop.simulation import simulate_batch
     pr = build_problem(sc, {"k_vor0": PAPER[0], "r_safe": PAPER[1], "lam_sink": LAM_SINK})
     xf, _ = simulate_batch(pr.layout, pr.x0[:, None], pr.p[:, None])
     row = classify(pr.model, xf[:, 0])

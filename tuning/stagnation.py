@@ -1,6 +1,6 @@
 """Stagnation points of the APF guidance fields (where the desired-heading vector field vanishes).
 
-The fields of :mod:`mmg_casadi.fields` are evaluated for one ship at a free position ``pos`` and one static
+The fields of :mod:`mmg_casadi.guidance.fields` are evaluated for one ship at a free position ``pos`` and one static
 obstacle, as a CasADi Function ``pos -> V(pos)``; a stagnation point is a root of V found with CasADi's Newton
 ``rootfinder`` from an initial guess. The paper's example (obstacle at (−10, 0) L of radius 0.5 L, goal at
 (10, 0) L, inverse-square k_att = 50, k_rep = 200 000) has its stagnation point on the axis behind the obstacle,
@@ -20,7 +20,7 @@ import casadi as ca
 import numpy as np
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.fields import (InverseSquareParams, ModifiedVortexParams, SinkVortexParams, inverse_square,
+from mmg_casadi.guidance.fields import (InverseSquareParams, ModifiedVortexParams, SinkVortexParams, inverse_square,
                                modified_vortex, sink_vortex)
 
 _DEFAULTS = {

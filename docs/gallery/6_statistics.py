@@ -12,7 +12,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from mmg_casadi.montecarlo import run_study
+from mmg_casadi.montecarlo.study import run_study
 
 out = Path(sys.argv[1])
 with tempfile.TemporaryDirectory() as tmp:

@@ -1,0 +1,441 @@
+"""Compiled rollouts of the closed loop: one scenario with its full history, or a batch keeping final states.
+
+The closed-loop step is compiled once per :class:`~mmg_casadi.closed_loop.step.Layout` (native code, cached on disk)
+and rolled out with ``mapaccum`` in chunks of steps; a rollout stops after the chunk in which every ship has
+finished (reached its goal or diverged) or the horizon ``t_max`` (a step parameter) is reached.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from mmg_casadi.closed_loop.step import (AUX, GLOBAL_PARAMS, NS, S_, SHIP_STATE, Layout, build_closed_loop_step,
+                          build_guidance)
+from mmg_casadi.closed_loop.compiled import compile_function
+
+
+def rollout_functions(layout: Layout) -> list[ca.Function]:
+    """The closed-loop step and guidance Functions that rollouts of ``layout`` compile into one library: the
+    sparse ones (:func:`~mmg_casadi.closed_loop.step.build_closed_loop_step`) for an exact layout, else the dense.
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the Functions.
+    """
+    sparse = layout.smooth is None
+    return [build_closed_loop_step(layout, sparse=sparse), build_guidance(layout, sparse=sparse)]
+
+
+@lru_cache(maxsize=64)
+def _library(layout: Layout) -> tuple[ca.Function, ca.Function]:
+    step, guidance = rollout_functions(layout)
+    return tuple(compile_function(step, also=[guidance]))
+
+
+def compiled_step(layout: Layout) -> ca.Function:
+    """Natively compiled closed-loop step for ``layout`` (memoised in-process, cached on disk).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the Function.
+    """
+    return _library(layout)[0]
+
+
+def compiled_guidance(layout: Layout) -> ca.Function:
+    """Natively compiled guidance-only Function for ``layout`` (for timing guidance calls; the same library as
+    :func:`compiled_step`).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the Function.
+    """
+    return _library(layout)[1]
+
+
+@lru_cache(maxsize=64)
+def _chunk(layout: Layout, chunk: int, batch: int) -> ca.Function:
+    step = compiled_step(layout)
+    if batch > 1:
+        step = step.map(batch)
+    return step.mapaccum(chunk)
+
+
+@lru_cache(maxsize=64)
+def _chunk_final(layout: Layout, chunk: int, batch: int) -> ca.Function:
+    """``chunk`` steps of a batch returning only the final states (no history copied out of compiled code)."""
+    F = _chunk(layout, chunk, batch)
+    x = ca.MX.sym("x", layout.nx, batch)
+    p = ca.MX.sym("p", layout.np, batch)
+    X, _ = F(x, p)
+    return ca.Function(f"chunk_final_{layout.key()}_{chunk}_{batch}", [x, p], [X[:, -batch:]])
+
+
+class _Bound:
+    """A dense Function called through CasADi's buffer interface: its inputs and outputs are numpy arrays bound
+    once, so a call copies the inputs in and the outputs out without converting to and from ``DM``."""
+
+    def __init__(self, f: ca.Function):
+        self.f = f
+        self.buf, self.trigger = f.buffer()
+        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
+        self.res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
+        self.shapes = [f.size_out(i) for i in range(f.n_out())]
+        for i, a in enumerate(self.args):
+            self.buf.set_arg(i, memoryview(a))
+        for i, r in enumerate(self.res):
+            self.buf.set_res(i, memoryview(r))
+
+    def __call__(self, *inputs) -> list[np.ndarray]:
+        for a, x in zip(self.args, inputs):
+            a[:] = np.asarray(x, float).ravel(order="F")
+        self.trigger()
+        return [r.reshape(shape, order="F").copy() for r, shape in zip(self.res, self.shapes)]
+
+
+@lru_cache(maxsize=64)
+def _bound(kind: str, layout: Layout, chunk: int, batch: int, every: int = 1) -> _Bound:
+    f = _chunk_final(layout, chunk, batch) if kind == "final" else _chunk_history(layout, chunk, batch, every)
+    return _Bound(f)
+
+
+HISTORY_STATE: tuple[str, ...] = ("x", "y", "psi", "status")
+"""Ship state variables kept by :func:`simulate_batch_history`."""
+
+
+@lru_cache(maxsize=64)
+def _chunk_history(layout: Layout, chunk: int, batch: int, every: int) -> ca.Function:
+    """``chunk`` steps of a batch returning the final states and, every ``every`` steps, the time and the
+    :data:`HISTORY_STATE` rows of every ship (``(1 + 4 N, (chunk // every) * batch)``, step-major blocks)."""
+    F = _chunk(layout, chunk, batch)
+    x = ca.MX.sym("x", layout.nx, batch)
+    p = ca.MX.sym("p", layout.np, batch)
+    X, _ = F(x, p)
+    rows = [0] + [1 + i * NS + S_[name] for i in range(layout.n_ships) for name in HISTORY_STATE]
+    cols = [k * batch + j for k in range(every - 1, chunk, every) for j in range(batch)]
+    return ca.Function(f"chunk_hist_{layout.key()}_{chunk}_{batch}_{every}", [x, p],
+                       [X[:, -batch:], X[rows, cols]])
+
+
+def _finished(layout: Layout, x: np.ndarray, t_max) -> np.ndarray:
+    """Per column of scenario states: every ship has stopped sailing, or that column's horizon is reached."""
+    x = np.atleast_2d(x.T).T
+    status = x[1 + S_["status"]::NS, :][:layout.n_ships]
+    return np.all(status != 0, axis=0) | (x[0] >= np.asarray(t_max) - 1e-9)
+
+
+def sailing_mask(status) -> np.ndarray:
+    """``(K, N)`` True while a ship sails (status 0), and at the sample at which it stopped.
+
+    Parameters
+    ----------
+    status : array (K, N)
+        Status history (0 sailing, 1 reached, 2 diverged).
+
+    Examples
+    --------
+    >>> sailing_mask(np.array([[0, 0], [0, 1], [1, 1]])).astype(int).tolist()
+    [[1, 1], [1, 1], [1, 0]]
+    """
+    status = np.asarray(status)
+    mask = status == 0
+    first_stop = np.argmax(~mask, axis=0)
+    for i, k in enumerate(first_stop):
+        if not mask[:, i].all():
+            mask[k, i] = True
+    return mask
+
+
+@dataclass
+class Trajectory:
+    """History of one closed-loop rollout.
+
+    Parameters
+    ----------
+    layout : Layout
+        Shape of the closed loop.
+    t : ndarray (T+1,)
+        Times of the stored states (non-dimensional).
+    states : ndarray (T+1, N, NS)
+        Ship states, columns named by :data:`~mmg_casadi.closed_loop.step.SHIP_STATE`.
+    aux : ndarray (T, N, 4)
+        Commanded rudder, desired heading, cross-track error and reactive flag used over each step.
+    """
+
+    layout: Layout
+    t: np.ndarray
+    states: np.ndarray
+    aux: np.ndarray
+
+    def state(self, name: str, ship: int | None = None) -> np.ndarray:
+        """History of one state variable, ``(T+1, N)`` or ``(T+1,)`` for one ship.
+
+        Parameters
+        ----------
+        name : str
+            A name of :data:`~mmg_casadi.closed_loop.step.SHIP_STATE`.
+        ship : int, optional
+            Ship index; all ships if omitted.
+        """
+        col = self.states[:, :, S_[name]]
+        return col if ship is None else col[:, ship]
+
+    def auxiliary(self, name: str, ship: int | None = None) -> np.ndarray:
+        """History of one auxiliary signal, ``(T, N)`` or ``(T,)`` for one ship.
+
+        Parameters
+        ----------
+        name : str
+            ``delta_c``, ``psi_d``, ``y_e`` or ``reactive``.
+        ship : int, optional
+            Ship index; all ships if omitted.
+        """
+        col = self.aux[:, :, AUX.index(name)]
+        return col if ship is None else col[:, ship]
+
+    @property
+    def final(self) -> np.ndarray:
+        """Final ship states ``(N, NS)``."""
+        return self.states[-1]
+
+    def sailing_mask(self) -> np.ndarray:
+        """``(T+1, N)`` True while a ship is still sailing (:func:`sailing_mask` of its status history)."""
+        return sailing_mask(self.state("status"))
+
+    def to_npz(self, path) -> None:
+        """Save times, states and auxiliary signals (with their names) as a compressed ``.npz``.
+
+        Parameters
+        ----------
+        path : str or Path
+            Destination file.
+        """
+        np.savez_compressed(path, t=self.t, states=self.states, aux=self.aux,
+                            state_names=np.array(SHIP_STATE), aux_names=np.array(AUX))
+
+    def to_csv(self, path, names=None) -> None:
+        """Long-format CSV: one row per (time, ship) with the MMG state and the auxiliary signals.
+
+        Parameters
+        ----------
+        path : str or Path
+            Destination file.
+        names : list of str, optional
+            Ship names (default ``ship0``, ``ship1``, ...).
+        """
+        names = names or [f"ship{i}" for i in range(self.layout.n_ships)]
+        cols = ["u", "v", "r", "x", "y", "psi", "delta", "status"]
+        aux = np.concatenate([self.aux, self.aux[-1:]], axis=0) if len(self.aux) else np.zeros(
+            (len(self.t), self.layout.n_ships, len(AUX)))
+        with open(path, "w") as fh:
+            fh.write(",".join(["t", "ship"] + cols + list(AUX)) + "\n")
+            for k, tk in enumerate(self.t):
+                for i in range(self.layout.n_ships):
+                    vals = [self.states[k, i, S_[c]] for c in cols] + list(aux[k, i])
+                    fh.write(f"{tk:.4f},{names[i]}," + ",".join(f"{v:.6g}" for v in vals) + "\n")
+
+
+def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200) -> Trajectory:
+    """Roll out one scenario until every ship has finished or ``t_max`` (in ``p``) is reached.
+
+    Parameters
+    ----------
+    layout : Layout
+        Shape of the closed loop.
+    x0 : ndarray (nx,)
+        Initial scenario state (:func:`~mmg_casadi.closed_loop.step.initial_state`).
+    p : ndarray (np,)
+        Parameter vector (:func:`~mmg_casadi.closed_loop.step.pack_params`).
+    chunk : int
+        Steps per compiled ``mapaccum`` call.
+    """
+    F = _chunk(layout, chunk, 1)
+    t_max = float(p[GLOBAL_PARAMS.index("t_max")])
+    xs, auxs = [np.asarray(x0, float)[:, None]], []
+    x = np.asarray(x0, float)
+    while not _finished(layout, x, t_max)[0]:
+        Xc, Ac = F(x, p)
+        Xc = np.array(Xc)
+        # mapaccum stacks the (NAUX, N) output of each step horizontally: step-major blocks of N columns
+        Ac = np.array(Ac).reshape(len(AUX), chunk, layout.n_ships)
+        xs.append(Xc)
+        auxs.append(np.transpose(Ac, (1, 2, 0)))
+        x = Xc[:, -1]
+    X = np.concatenate(xs, axis=1)
+    A = np.concatenate(auxs, axis=0) if auxs else np.zeros((0, layout.n_ships, len(AUX)))
+    # drop the frozen tail after the horizon / after the last ship finished
+    t = X[0]
+    stop = len(t) - 1
+    fin = _finished(layout, X, t_max)
+    if fin.any():
+        stop = int(np.argmax(fin))
+    X, A = X[:, :stop + 1], A[:stop]
+    states = X[1:, :].T.reshape(X.shape[1], layout.n_ships, NS)
+    return Trajectory(layout, X[0].copy(), states, A)
+
+
+DEFAULT_WIDTH = 32
+"""Scenarios stepped side by side by :func:`simulate_batch` (columns of one compiled ``map``)."""
+
+
+def simulate_batch(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int = 100,
+                   width: int | None = DEFAULT_WIDTH) -> tuple[np.ndarray, float]:
+    """Roll out ``M`` scenarios of one layout (columns of ``X0`` (nx, M) and ``P`` (np, M)) to their ends.
+
+    At most ``width`` scenarios are stepped side by side, ``chunk`` steps per compiled call; after every call the
+    scenarios that finished leave the batch and waiting ones take their columns (when none wait, the batch
+    shrinks), so no compiled work is spent on finished scenarios beyond the chunk in which they finished.
+    Every column is computed independently, so the final states do not depend on ``width`` or ``chunk``.
+
+    Parameters
+    ----------
+    layout : Layout
+        Shape of the closed loop shared by all scenarios.
+    X0 : ndarray (nx, M)
+        Initial scenario states.
+    P : ndarray (np, M)
+        Parameter vectors (each column its own horizon ``t_max``).
+    chunk : int
+        Steps per compiled call.
+    width : int, optional
+        Scenarios stepped together (``None``: all ``M``).
+
+    Returns
+    -------
+    tuple
+        Final scenario states ``(nx, M)`` and the wall time spent in compiled code (s).
+    """
+    def call(x, p, active):
+        return _bound("final", layout, chunk, len(active))(x, p)[0]
+
+    return _stream(layout, X0, P, width, call)
+
+
+def _bucket(n: int, width: int) -> int:
+    """Columns of the compiled call for ``n`` running scenarios: the next power of two, at most ``width`` (so a
+    draining batch reuses a few compiled widths instead of building one per count)."""
+    return min(width, 1 << (n - 1).bit_length())
+
+
+def _stream(layout: Layout, X0, P, width, call) -> tuple[np.ndarray, float]:
+    """Step the columns of ``X0`` / ``P`` at most ``width`` at a time with ``call(x, p, active) -> x_next``
+    (``active``: the original column indices of ``x``, -1 for padding); a column that finished leaves the batch
+    and a waiting one takes its place. Returns the final states and the time spent in ``call``."""
+    X0 = np.asarray(X0, float)
+    P = np.asarray(P, float)
+    M = X0.shape[1]
+    width = M if width is None else max(1, min(int(width), M))
+    t_row = GLOBAL_PARAMS.index("t_max")
+    out = X0.copy()
+    active = [j for j in range(M) if not _finished(layout, X0[:, j:j + 1], P[t_row, j])[0]]
+    pending = active[width:]
+    active = active[:width]
+    x, p = X0[:, active], P[:, active]
+    busy = 0.0
+    while active:
+        t0 = time.perf_counter()
+        n = len(active)
+        b = _bucket(n, width)
+        if b > n:  # pad to a width already built, with columns past their horizon (held: they cost nothing)
+            pad_x, pad_p = np.repeat(x[:, :1], b - n, axis=1), np.repeat(p[:, :1], b - n, axis=1)
+            pad_x[0] = pad_p[t_row]
+            x = call(np.hstack([x, pad_x]), np.hstack([p, pad_p]), active + [-1] * (b - n))[:, :n]
+        else:
+            x = call(x, p, active)
+        busy += time.perf_counter() - t0
+        done = _finished(layout, x, p[t_row])
+        if not done.any():
+            continue
+        out[:, [active[k] for k in np.flatnonzero(done)]] = x[:, done]
+        keep = np.flatnonzero(~done)
+        active = [active[k] for k in keep]
+        x, p = x[:, keep], p[:, keep]
+        n_new = min(len(pending), width - len(active))
+        if n_new:
+            new, pending = pending[:n_new], pending[n_new:]
+            active += new
+            x = np.hstack([x, X0[:, new]])
+            p = np.hstack([p, P[:, new]])
+    return out, busy
+
+
+@dataclass
+class BatchHistory:
+    """Decimated history of a batch rollout (:func:`simulate_batch_history`).
+
+    Parameters
+    ----------
+    t : list of ndarray (K_m,)
+        Per scenario, the time of each kept sample (the initial state first).
+    states : list of ndarray (K_m, N, 4)
+        Per scenario, ``x``, ``y``, ``psi`` and ``status`` (:data:`HISTORY_STATE`) of every ship.
+    """
+
+    t: list
+    states: list
+
+    def column(self, m: int) -> tuple[np.ndarray, np.ndarray]:
+        """Times ``(K,)`` and ship states ``(K, N, 4)`` of scenario ``m``, up to its last advancing sample.
+
+        Parameters
+        ----------
+        m : int
+            Column (scenario) index.
+        """
+        t = self.t[m]
+        last = int(np.argmax(t)) + 1  # the clock stops at the horizon; later samples repeat the final state
+        return t[:last], self.states[m][:last]
+
+
+def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chunk: int = 100, every: int = 2,
+                           width: int | None = DEFAULT_WIDTH) -> tuple[np.ndarray, float, BatchHistory]:
+    """:func:`simulate_batch` that also keeps the time, position, heading and status of every ship every
+    ``every`` guidance steps (from the compiled ``mapaccum`` outputs; ``chunk`` must be a multiple of ``every``).
+
+    Returns the final scenario states ``(nx, M)``, the wall time spent in compiled code (s) and the
+    :class:`BatchHistory` (the initial state is its first sample). Finished scenarios leave the batch as in
+    :func:`simulate_batch`.
+
+    Parameters
+    ----------
+    layout : Layout
+        Shape of the closed loop.
+    X0, P : ndarray (nx, M), (np, M)
+        Initial states and parameter vectors, one column per scenario.
+    chunk : int
+        Steps per compiled call.
+    every : int
+        Keep every ``every``-th step.
+    width : int, optional
+        Scenarios stepped together (``None``: all ``M``).
+    """
+    if isinstance(every, bool) or not isinstance(every, int) or every < 1 or chunk % every:
+        raise ValueError(f"every: expected an integer >= 1 dividing chunk={chunk}, got {every!r}")
+    X0 = np.asarray(X0, float)
+    M, N = X0.shape[1], layout.n_ships
+    rows = [0] + [1 + i * NS + S_[name] for i in range(N) for name in HISTORY_STATE]
+    hist: list[list[np.ndarray]] = [[X0[rows, j][None, :]] for j in range(M)]
+
+    def call(x, p, active):
+        xf, H = _bound("history", layout, chunk, len(active), every)(x, p)
+        H = H.reshape(len(rows), chunk // every, len(active))
+        for k, j in enumerate(active):
+            if j >= 0:
+                hist[j].append(H[:, :, k].T)
+        return np.array(xf)
+
+    out, busy = _stream(layout, X0, P, width, call)
+    t, states = [], []
+    for j in range(M):
+        Hj = np.concatenate(hist[j], axis=0)  # (K_j, rows)
+        t.append(Hj[:, 0])
+        states.append(Hj[:, 1:].reshape(len(Hj), N, len(HISTORY_STATE)))
+    return out, busy, BatchHistory(t, states)

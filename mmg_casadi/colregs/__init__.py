@@ -1,0 +1,1 @@
+"""COLREG machinery: encounter classification and rule scoring (numpy post-processing)."""

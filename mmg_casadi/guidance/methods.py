@@ -1,0 +1,225 @@
+"""The method registry: each collision-avoidance method's name, guidance builder and parameter groups.
+
+The closed-loop step (:mod:`mmg_casadi.closed_loop.step`), the scenario loader, the studies, the Monte Carlo study,
+the benchmarks and the CLI all read :data:`METHODS`; adding a method is one entry here plus its builder.
+
+A builder takes a :class:`GuidanceInputs` (CasADi expressions of one ship and its neighbours inside the
+closed-loop step) and returns the 2×1 desired-heading vector of the method; the closed loop adds the channel
+walls' field and steers along the sum while any neighbour is within R_safe (or a wall within its range).
+
+Examples
+--------
+>>> NAMES
+('inverse-square', 'sink-vortex', 'modified-vortex', 'velocity-obstacle', 'none', 'colregs-vortex')
+>>> METHODS["modified-vortex"].groups
+('sink-vortex', 'modified-vortex')
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import dataclasses
+
+import casadi as ca
+
+from mmg_casadi.guidance import colregs_vortex
+
+from mmg_casadi.guidance import fields
+
+from mmg_casadi.guidance import velocity_obstacle
+from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams
+from mmg_casadi.errors import InputError
+
+
+@dataclass(frozen=True)
+class GuidanceInputs:
+    """What a method's builder sees of one ship inside the closed-loop step (CasADi expressions).
+
+    Parameters
+    ----------
+    pos, vel : SX (2×1)
+        Own position (L) and global velocity over the ground (U; through the water plus any current).
+    psi, speed : SX
+        Own heading (rad) and speed over ground (U).
+    goal : SX (2×1)
+        The waypoint being tracked (L).
+    nb_pos, nb_vel : SX (2×M)
+        Neighbours' positions and global velocities over the ground (other ships, then static obstacles with
+        zero velocity).
+    nb_radius, active : SX (1×M)
+        Neighbours' radii (L) and the 0/1 (or smooth) mask of neighbours present within R_safe.
+    P : dict
+        The step's named numeric parameters (:data:`~mmg_casadi.closed_loop.step.GLOBAL_PARAMS`, angles in rad).
+    layout : Layout
+        The closed loop's shape (structural parameters such as the velocity obstacle's candidates and cone).
+    held_heading : SX, optional
+        The heading the method chose at the previous step while a neighbour was within R_safe, else the ship's
+        heading (state ``vo_heading``; rad).
+    """
+
+    pos: object
+    vel: object
+    psi: object
+    speed: object
+    goal: object
+    nb_pos: object
+    nb_vel: object
+    nb_radius: object
+    active: object
+    P: dict
+    layout: object
+    held_heading: object = None
+
+
+@dataclass(frozen=True)
+class Method:
+    """One registered method.
+
+    Parameters
+    ----------
+    name : str
+        Name in scenario files, ``--method`` and the Python API.
+    builder : callable or None
+        ``GuidanceInputs -> 2×1 desired-heading vector``; ``None`` for pure ILOS waypoint tracking.
+    groups : tuple of str
+        Parameter groups (:data:`mmg_casadi.params.GROUPS`) the builder reads.
+    source : str
+        Where the method comes from.
+    inputs : tuple of str
+        Numeric step inputs only this method reads (names of :data:`GuidanceInputs.P`, table angles in rad
+        without the ``_deg`` suffix); they enter the compiled step only of layouts where a ship uses the method,
+        so adding a method leaves every other compiled closed loop unchanged.
+    goal_capture : bool
+        A ship that passed its final waypoint outside the acceptance radius turns back to it (the paper's ILOS
+        follows the extended last leg for ever; kept for the paper's methods).
+    """
+
+    name: str
+    builder: Callable | None
+    groups: tuple[str, ...]
+    source: str
+    inputs: tuple[str, ...] = ()
+    goal_capture: bool = False
+
+
+def _inverse_square(g: GuidanceInputs):
+    P = g.P
+    return fields.inverse_square(g.pos, g.goal, g.nb_pos, g.nb_radius, g.active, k_att=P["k_att"],
+                                 k_rep=P["k_rep"], d0=P["d0"])
+
+
+def _sink_vortex(g: GuidanceInputs):
+    P = g.P
+    return fields.sink_vortex(g.pos, g.goal, g.nb_pos, g.active, lam_sink=P["lam_sink"], k_vor=P["k_vor"])
+
+
+def _modified_vortex(g: GuidanceInputs):
+    P = g.P
+    return fields.modified_vortex(g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active,
+                                  lam_sink=P["lam_sink"], k_vor0=P["k_vor0"], r_safe=P["r_safe"],
+                                  r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"], smooth=g.layout.smooth)
+
+
+_CV_FIELDS = tuple(f.name for f in dataclasses.fields(ColregsVortexParams))
+
+
+def _colregs_vortex(g: GuidanceInputs):
+    P = g.P
+    return colregs_vortex.colregs_vortex(
+        g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active, lam_sink=P["lam_sink"], k_vor0=P["k_vor0"],
+        r_safe=P["r_safe"], r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"],
+        n_candidates=g.layout.vo_candidates, **{k: P[f"cv_{k}"] for k in _CV_FIELDS})
+
+
+def _velocity_obstacle(g: GuidanceInputs):
+    D = g.P["collision_distance"]
+    psi_vo = velocity_obstacle.velocity_obstacle(
+        g.pos, g.speed, g.goal, g.nb_pos, g.nb_vel, g.active, collision_distance=D,
+        n_candidates=g.layout.vo_candidates, cone=g.layout.vo_cone)
+    if g.layout.vo_hold and g.held_heading is not None:
+        psi_vo = velocity_obstacle.hold_heading(psi_vo, g.held_heading, g.pos, g.speed, g.nb_pos, g.nb_vel,
+                                                g.active, collision_distance=D, cone=g.layout.vo_cone)
+    return ca.vertcat(ca.cos(psi_vo), ca.sin(psi_vo))
+
+
+METHODS: dict[str, Method] = {m.name: m for m in (
+    Method("inverse-square", _inverse_square, ("inverse-square",), "paper §4.1, eqs. (attractive)–(repulsive)"),
+    Method("sink-vortex", _sink_vortex, ("sink-vortex",), "paper §4.2, eqs. (sink)–(vortex)"),
+    Method("modified-vortex", _modified_vortex, ("sink-vortex", "modified-vortex"),
+           "paper §4.3, eqs. (modified_vortex)–(factor_f)"),
+    Method("velocity-obstacle", _velocity_obstacle, ("velocity-obstacle",),
+           "Huang et al. 2018 (Ocean Eng. 151), the paper's baseline"),
+    Method("none", None, (), "ILOS waypoint tracking only (a ship that holds its course)"),
+    Method("colregs-vortex", _colregs_vortex, ("sink-vortex", "modified-vortex", "colregs-vortex"),
+           "ours: the modified vortex with COLREG Rules 8, 13 and 17 (mmg_casadi.guidance.colregs_vortex)",
+           inputs=tuple(f"cv_{k}" for k in _CV_FIELDS), goal_capture=True),
+)}
+"""Every method, by name."""
+
+NAMES: tuple[str, ...] = tuple(METHODS)
+"""Method names in registry order."""
+
+AVOIDING: tuple[str, ...] = tuple(n for n, m in METHODS.items() if m.builder is not None)
+"""Methods that avoid collisions (all but ``"none"``)."""
+
+PAPER_STATISTICS: tuple[str, ...] = ("modified-vortex", "inverse-square", "velocity-obstacle")
+
+PAPER: tuple[str, ...] = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle")
+"""The methods of the paper (the studies' defaults compare these)."""
+"""Methods compared by the paper's statistical analysis."""
+
+
+def get(name, field: str = "method") -> Method:
+    """The registered method ``name``, or an :class:`~mmg_casadi.errors.InputError` naming ``field``.
+
+    Parameters
+    ----------
+    name : str
+        Name of the method.
+    field : str, default 'method'
+        Name of the input field, used in the error message.
+
+    Examples
+    --------
+    >>> get("none").builder is None
+    True
+    >>> get("vortex")
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, none, colregs-vortex, got 'vortex'
+    """
+    if not isinstance(name, str) or name not in METHODS:
+        raise InputError(field, f"one of: {', '.join(NAMES)}", name)
+    return METHODS[name]
+
+
+def parse_list(value, field: str = "methods") -> tuple[str, ...]:
+    """Method names from a comma-separated string or an iterable, checked and deduplicated.
+
+    Parameters
+    ----------
+    value : str or iterable of str
+        Method names, comma-separated or as an iterable.
+    field : str, default 'methods'
+        Name of the input field, used in the error message.
+
+    Examples
+    --------
+    >>> parse_list("none, inverse-square,none")
+    ('none', 'inverse-square')
+    """
+    allowed = f"a non-empty list of: {', '.join(NAMES)}"
+    if isinstance(value, str):
+        value = [m.strip() for m in value.split(",") if m.strip()]
+    try:
+        items = list(value)
+    except TypeError:
+        raise InputError(field, allowed, value) from None
+    if not items:
+        raise InputError(field, allowed, value)
+    for m in items:
+        if not isinstance(m, str) or m not in METHODS:
+            raise InputError(field, allowed, m)
+    return tuple(dict.fromkeys(items))

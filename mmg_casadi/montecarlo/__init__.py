@@ -1,0 +1,1 @@
+"""The Monte Carlo study: sampling plan, execution, results, statistics and failure mechanisms."""

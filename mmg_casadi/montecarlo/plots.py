@@ -1,0 +1,112 @@
+"""The paper's five-panel figure of the statistical analysis, plus the own ship's COLREG compliance, drawn from a
+:class:`~mmg_casadi.montecarlo.results.Summary`.
+
+Panels: success rate, computation time per guidance call, time to goal, control effort (CE), mean
+cross-track error (MCTE) and the share of runs (with a classified encounter) in which the own ship kept the
+COLREGs (not in the paper), each against the environment number, one series per method with 95 % confidence
+intervals as error bars. The figure is built with :class:`matplotlib.figure.Figure` directly (no pyplot, no
+global backend switch), so it works headless.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from matplotlib.figure import Figure
+
+from mmg_casadi.errors import InputError
+from mmg_casadi.montecarlo.results import Summary
+
+PANELS: tuple[tuple[str, str, str, float], ...] = (
+    ("success", "Success rate", "Success rate [%]", 100.0),
+    ("guidance_call_us", "Computation effort", "Time per guidance call [µs]", 1.0),
+    ("time_to_goal", "Time to reach the goal", "Time to goal [L/U]", 1.0),
+    ("ce", "Control effort (CE)", "CE [-]", 1.0),
+    ("mcte", "Mean cross-track error (MCTE)", "MCTE [L]", 1.0),
+    ("compliance", "Own ship COLREG-compliant (runs with an encounter)", "Compliant [%]", 100.0),
+)
+"""(metric, title, y label, scale) of each panel; the success rate is shown in percent."""
+
+_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+
+
+def _columns(metric: str) -> tuple[str, str, str]:
+    if metric in ("success", "compliance"):
+        return f"{metric}_rate", f"{metric}_ci_low", f"{metric}_ci_high"
+    return f"{metric}_mean", f"{metric}_ci_low", f"{metric}_ci_high"
+
+
+def _nan_to_zero(x: float) -> float:
+    return 0.0 if x is None or not math.isfinite(x) else x
+
+
+def plot_statistics(summary, path=None) -> Figure:
+    """Draw the six-panel statistics figure; save it if ``path`` is given.
+
+    Parameters
+    ----------
+    summary : Summary or list of dict
+        Output of :func:`mmg_casadi.montecarlo.results.summarize` (or its ``rows``).
+    path : str or Path, optional
+        File to save to; the format follows the extension (png, pdf, svg, ...).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    >>> from mmg_casadi.montecarlo.results import summarize
+    >>> rows = [{"environment": e, "method": m, "run": r, "success": r != 0, "time_to_goal": 60.0 + r,
+    ...          "ce": 0.1, "mcte": 0.2, "guidance_call_us": 3.0}
+    ...         for e in (1, 2) for m in ("apf", "modified-vortex") for r in range(5)]
+    >>> fig = plot_statistics(summarize(rows))
+    >>> len(fig.axes)
+    6
+    """
+    if isinstance(summary, Summary):
+        rows = summary.rows
+    elif isinstance(summary, (list, tuple)) and all(isinstance(r, dict) for r in summary):
+        rows = list(summary)
+    else:
+        raise InputError("summary", "a Summary or a list of summary rows", type(summary).__name__)
+    if not rows:
+        raise InputError("summary", "at least one (environment, method) row", "an empty summary")
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    envs = sorted({int(r["environment"]) for r in rows})
+
+    fig = Figure(figsize=(11.0, 12.0), layout="constrained")
+    grid = fig.add_gridspec(3, 2)
+    slots = [grid[0, 0], grid[1, 0], grid[1, 1], grid[2, 0], grid[2, 1], grid[0, 1]]
+    width = 0.3
+    offsets = [width * (i - (len(methods) - 1) / 2) / max(len(methods), 1) for i in range(len(methods))]
+    for slot, (metric, title, ylabel, scale) in zip(slots, PANELS):
+        ax = fig.add_subplot(slot)
+        mean_col, low_col, high_col = _columns(metric)
+        for i, method in enumerate(methods):
+            by_env = {int(r["environment"]): r for r in rows if r["method"] == method}
+            xs, ys, lo, hi = [], [], [], []
+            for env in envs:
+                r = by_env.get(env)
+                if r is None or r.get(mean_col) is None or not math.isfinite(r[mean_col]):
+                    continue
+                y = scale * r[mean_col]
+                xs.append(env + offsets[i])
+                ys.append(y)
+                lo.append(_nan_to_zero(y - scale * r[low_col]))
+                hi.append(_nan_to_zero(scale * r[high_col] - y))
+            ax.errorbar(xs, ys, yerr=[lo, hi], marker=_MARKERS[i % len(_MARKERS)], linestyle="-", capsize=4,
+                        label=str(method))
+        ax.set_title(title)
+        ax.set_xlabel("Environment")
+        ax.set_ylabel(ylabel)
+        ax.set_xticks(envs)
+        ax.grid(True, alpha=0.3)
+        if metric == "success":
+            ax.legend(loc="best")
+    if path is not None:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=150)
+    return fig

@@ -1,0 +1,212 @@
+"""The 22 Imazu encounter problems, scaled to the KCS, as scenario dicts; a runner and a figure of all 22.
+
+Geometry. Imazu's problems (H. Imazu, 1987; reproduced in Sawada, Sato, Majima, J. Mar. Sci. Technol. 26 (2021)
+1243) put the own ship and one to three target ships on straight courses that all pass through one point at the
+same time if nobody manoeuvres. The target headings and which targets are slow were read from the public
+encoding in MarWaltz/TUD_RL, ``tud_rl/envs/_envs/Imazu.py`` (commit 9000de0, "the 22 ship encounter situations
+of Imazu (1987) as detailed in Sawada et al. (2021, JMST)"): the own ship heads north (0°); cases 1–4 have one
+target, 5–12 two, 13–22 three. In that encoding cases 5 and 8 are identical (a head-on and a crossing target
+from starboard); kept as read. A later file of the same repository (``MMG_Imazu.py``) gives case 12 a third,
+head-on target; the two-target form used here agrees with an independent encoding of the same table.
+
+Scaling to the KCS: in Imazu's problems every ship starts 6 NM from the meeting point (about 48 KCS lengths of
+230 m); here the range is ``MEET_DISTANCE`` = 40 L. The own ship starts at (0, 0) with heading 0° and the
+design speed, the meeting point is (40 L, 0); every target starts at ``meeting − speed × 40 × (cos χ, sin χ)``,
+i.e. it reaches the meeting point at t = 40 (L/U) like the own ship. Targets run at the design speed except the ship
+being overtaken, which runs at ``SLOW_SPEED`` = 0.5 (the lower end of the paper's target speeds, U_des/2; the
+sources differ: propeller revolutions 0.7/1.8 in TUD_RL, a 0.7 speed ratio in others). Every ship's goal lies
+on its course ``GOAL_PAST`` = 30 L (scaled by its speed) past the meeting point, so without manoeuvres all ships
+reach their goals together at t = 70.
+
+Examples
+--------
+>>> d = imazu_case(1, method="modified-vortex", targets="hold")
+>>> [s["start"] for s in d["ships"]], d["ships"][1]["heading"], d["ships"][1]["method"]
+([[0.0, 0.0], [80.0, 0.0]], 180.0, 'none')
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from mmg_casadi.errors import InputError
+from mmg_casadi.plotting import COLORS, draw_goal, draw_path, marine_axes
+from mmg_casadi.guidance.methods import NAMES as METHODS
+from mmg_casadi.scenarios.scenario import scenario_from_dict
+
+MEET_DISTANCE = 40.0  #: L, own ship start to the common meeting point
+GOAL_PAST = 30.0  #: L, own ship goal beyond the meeting point (targets: scaled by their speed)
+SLOW_SPEED = 0.5  #: fraction of design speed of the ship being overtaken
+T_MAX = 200.0  #: horizon (L/U); an unhindered own ship needs 70
+TARGET_MODES = ("hold", "avoid")
+
+#: case -> target headings (degrees, from north towards east); a ``"slow"`` suffix marks the overtaken ship
+CASES = {
+    1: (180,), 2: (270,), 3: ("0slow",), 4: (45,),
+    5: (180, 270), 6: (-10, -45), 7: ("0slow", -45), 8: (180, 270), 9: (-30, -90), 10: (-90, 15),
+    11: (90, -30), 12: (-45, -10),
+    13: (180, 10, 45), 14: (-10, -45, -90), 15: ("0slow", -45, -90), 16: (45, 90, -90), 17: ("0slow", 10, -45),
+    18: (-135, -15, -30), 19: (15, -15, -135), 20: ("0slow", -15, -90), 21: (-15, 15, -90),
+    22: ("0slow", -45, -90),
+}
+
+
+def _targets(k: int) -> list[tuple[float, float]]:
+    """(heading in degrees, speed) of each target of case ``k``."""
+    out = []
+    for h in CASES[k]:
+        if isinstance(h, str):
+            out.append((float(h.removesuffix("slow")), SLOW_SPEED))
+        else:
+            out.append((float(h), 1.0))
+    return out
+
+
+def _check_case(k) -> int:
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k not in CASES:
+        raise InputError("case", "an integer from 1 to 22", k)
+    return int(k)
+
+
+def imazu_case(k: int, *, method: str, targets: str = "hold", t_max: float = T_MAX) -> dict:
+    """Scenario dict (the scenario-file shape, see :mod:`mmg_casadi.scenarios.scenario`) of Imazu problem ``k``.
+
+    Parameters
+    ----------
+    k : int
+        Problem number, 1 to 22.
+    method : str
+        Guidance method of the own ship (one of :data:`mmg_casadi.guidance.methods.METHODS`).
+    targets : str
+        ``"hold"``: targets keep course and speed (method ``"none"``); ``"avoid"``: they use ``method`` too.
+    t_max : float
+        Horizon (L/U).
+
+    Examples
+    --------
+    >>> d = imazu_case(3, method="velocity-obstacle", targets="avoid")
+    >>> d["ships"][1]["start"], d["ships"][1]["speed"], d["ships"][1]["method"]
+    ([20.0, 0.0], 0.5, 'velocity-obstacle')
+    >>> round(math.dist(d["ships"][0]["waypoints"][0], d["ships"][0]["start"]), 6)
+    70.0
+    """
+    k = _check_case(k)
+    if method not in METHODS:
+        raise InputError("method", f"one of: {', '.join(METHODS)}", method)
+    if targets not in TARGET_MODES:
+        raise InputError("targets", "one of: hold, avoid", targets)
+    meet = np.array([MEET_DISTANCE, 0.0])
+    ships = [{"name": "own", "start": [0.0, 0.0], "heading": 0.0, "speed": 1.0,
+              "waypoints": [[MEET_DISTANCE + GOAL_PAST, 0.0]]}]
+    for i, (head, speed) in enumerate(_targets(k)):
+        e = np.array([math.cos(math.radians(head)), math.sin(math.radians(head))])
+        start = meet - speed * MEET_DISTANCE * e
+        goal = meet + speed * GOAL_PAST * e
+        ships.append({"name": f"target{i + 1}", "start": [round(float(v), 9) + 0.0 for v in start],
+                      "heading": head, "speed": speed, "waypoints": [[round(float(v), 9) + 0.0 for v in goal]],
+                      "method": "none" if targets == "hold" else method})
+    return {"settings": {"method": method, "t_max": float(t_max)}, "ships": ships}
+
+
+def run_imazu(method: str, targets: str = "hold", *, cases=tuple(CASES), params: dict | None = None) -> list[dict]:
+    """Simulate Imazu problems and assess the own ship.
+
+    Returns one dict per case: ``case``, ``safe`` (own ship reached its goal and never came within the collision
+    distance of any ship), ``reached_goal``, ``min_distance`` (L, own ship to its nearest target), ``collided``
+    and ``result`` (the :class:`~mmg_casadi.scenarios.run.ScenarioResult`).
+
+    Parameters
+    ----------
+    method : str
+        Guidance method of the own ship (one of :data:`mmg_casadi.guidance.methods.METHODS`).
+    targets : str, optional
+        ``"hold"`` (default): targets keep course and speed; ``"avoid"``: they use ``method`` too.
+    cases : iterable of int, optional
+        Problem numbers to run, each 1 to 22, in this order; default all 22.
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`), passed to
+        :func:`~mmg_casadi.scenarios.run.run_scenario`.
+
+    Returns
+    -------
+    list of dict
+        One row per case, as described above.
+
+    Examples
+    --------
+    >>> rows = run_imazu("modified-vortex", "hold", cases=(2,))
+    >>> rows[0]["case"], rows[0]["safe"], rows[0]["min_distance"] > 2.0
+    (2, True, True)
+    """
+    from mmg_casadi.scenarios.run import run_scenario
+    out = []
+    for k in cases:
+        sc = scenario_from_dict(imazu_case(k, method=method, targets=targets), source=f"imazu{k}")
+        res = run_scenario(sc, params)
+        own = res.metrics["ships"][0]
+        dmin = float(np.min(res.own_distance()))
+        collided = dmin < res.params["collision_distance"]
+        out.append({"case": int(k), "safe": bool(own["reached_goal"] and not collided),
+                    "reached_goal": bool(own["reached_goal"]), "min_distance": dmin, "collided": bool(collided),
+                    "result": res})
+    return out
+
+
+def plot_imazu(rows: list[dict], path=None, *, title: str | None = None, ncols: int = 6) -> Figure:
+    """Grid of small trajectory plots, one per case of :func:`run_imazu` (own ship blue), titled with the case,
+    the own ship's minimum distance and whether it was safe.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`run_imazu` (each needs ``case``, ``safe``, ``collided``, ``min_distance`` and
+        ``result``), one panel each, in order.
+    path : str or os.PathLike, optional
+        If given, the figure is also saved there (110 dpi; the format follows the suffix).
+    title : str, optional
+        Title above the grid.
+    ncols : int, optional
+        Panels per row (default 6); unused panels of the last row are blank.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not attached to pyplot).
+
+    Examples
+    --------
+    >>> fig = plot_imazu(run_imazu("modified-vortex", "hold", cases=(1, 2)), ncols=2)
+    >>> [ax.get_title().split(":")[0] for ax in fig.axes]
+    ['case 1', 'case 2']
+    """
+    n = len(rows)
+    nrows = max(1, math.ceil(n / ncols))
+    fig = Figure(figsize=(2.6 * ncols, 2.8 * nrows), layout="constrained")
+    axes = fig.subplots(nrows, ncols, squeeze=False)
+    for ax in axes.flat[n:]:
+        ax.set_axis_off()
+    for ax, row in zip(axes.flat, rows):
+        res = row["result"]
+        traj, sc = res.trajectory, res.scenario
+        mask = traj.sailing_mask()
+        for i in range(traj.layout.n_ships):
+            m = mask[:, i]
+            draw_path(ax, traj.state("x", i)[m], traj.state("y", i)[m], traj.state("psi", i)[m],
+                      COLORS[i % len(COLORS)], n_outlines=3)
+            g = sc.ships[i].goal
+            draw_goal(ax, g[0], g[1], COLORS[i % len(COLORS)])
+        marine_axes(ax)
+        ax.set_xlabel("")
+        ax.set_ylabel("")
+        ax.tick_params(labelsize=6)
+        verdict = "safe" if row["safe"] else ("collision" if row["collided"] else "goal not reached")
+        ax.set_title(f"case {row['case']}: d_min {row['min_distance']:.1f} L, {verdict}", fontsize=7,
+                     color="k" if row["safe"] else "r")
+    if title:
+        fig.suptitle(title, fontsize=10)
+    if path:
+        fig.savefig(path, dpi=110)
+    return fig

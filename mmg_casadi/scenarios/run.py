@@ -1,0 +1,290 @@
+"""Run a :class:`~mmg_casadi.scenarios.scenario.Scenario` through the compiled closed loop and assess the result.
+
+``metrics.json`` schema (stable; distances in L, times non-dimensional L/U_des)::
+
+    {"method": str, "collision": bool, "t_end": float, "params": {every parameter of the table, resolved},
+     "ships": [{"name", "method", "status": "reached"|"diverged"|"stalled"|"timeout",
+                "reached_goal": bool, "time_to_goal": float|null, "ce": float, "mcte": float,
+                "collided": bool, "collision_time": float|null, "collision_with": str|null,
+                "min_distance": float, "stalled_at": [x, y]|null, "reactive_time": float}],
+     "pairs": [{"a", "b", "min_distance", "t_min", "encounter", "compliant",
+                "encounter_b", "compliant_b", "t_enter", "rules"}]}
+
+``encounter``/``compliant`` are from ship ``a``'s side (``encounter_b``/``compliant_b`` from ``b``'s);
+static obstacles appear as ``b = "obstacle<k>"`` with encounter ``"static"`` (no ``rules``). ``rules`` is the
+rule-by-rule COLREG scoring of a ship pair under the chosen profile (:func:`mmg_casadi.colregs.score.score_pair`).
+Outcome, CE and MCTE come from :meth:`mmg_casadi.closed_loop.step.ClosedLoopModel.outcomes` (``ce``/``mcte`` are null
+for a diverged ship).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from mmg_casadi.colregs import classify as colregs
+from mmg_casadi.closed_loop.step import build_problem
+from mmg_casadi.errors import InputError
+from mmg_casadi.io import json_safe, write_json
+from mmg_casadi.scenarios.scenario import Scenario, load_scenario, with_method
+from mmg_casadi.closed_loop.simulation import Trajectory, simulate
+
+
+@dataclass
+class ScenarioResult:
+    """A simulated scenario: the scenario, its trajectory and the assessed metrics (the JSON schema above).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario that ran.
+    trajectory : Trajectory
+        Its rollout (states and auxiliary signals at every guidance step).
+    metrics : dict
+        The assessment (module docstring), JSON-ready.
+    encounter_labels : dict
+        Per ship index, the COLREG situations it met, for figure legends.
+    """
+
+    scenario: object
+    trajectory: Trajectory
+    metrics: dict
+    encounter_labels: dict = field(default_factory=dict)
+
+    @property
+    def params(self) -> dict:
+        """The resolved parameter set the scenario ran with."""
+        return self.metrics["params"]
+
+    def names(self) -> list[str]:
+        """Ship names, own ship first."""
+        return [s.name for s in self.scenario.ships]
+
+    def plot(self, ax=None):
+        """Draw the result; returns the figure.
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Draw the ships' paths (marine view) into ``ax``; without it a new figure with paths, rudder and
+            distance panels (as ``simulate`` saves) is made.
+        """
+        from mmg_casadi.plotting import plot_paths, plot_scenario
+        if ax is None:
+            return plot_scenario(self)
+        plot_paths(self, ax)
+        return ax.figure
+
+    def to_frame(self):
+        """The per-ship metrics as a pandas DataFrame, one row per ship (index: ship name)."""
+        import pandas as pd
+        rows = [{k: v for k, v in s.items() if k != "stalled_at"} for s in self.metrics["ships"]]
+        return pd.DataFrame(rows).set_index("name")
+
+    def save(self, out, *, tracking: bool = False) -> Path:
+        """Write the files ``simulate`` writes (``trajectory.npz``, ``trajectory.csv``, ``scenario.png``,
+        ``metrics.json``) into directory ``out``; returns its path.
+
+        Parameters
+        ----------
+        out : str or Path
+            Output directory (created).
+        tracking : bool
+            Draw the waypoint-tracking figure instead of the encounter figure.
+        """
+        write_outputs(self, out, tracking=tracking)
+        return Path(out)
+
+    def pair_distances(self) -> dict:
+        """Distance histories ``{(a, b): d(t)}`` for every ship pair and ship–obstacle pair (NaN while a ship is
+        not sailing)."""
+        tr = self.trajectory
+        mask = tr.sailing_mask()
+        names = self.names()
+        N = len(names)
+        out = {}
+        for i in range(N):
+            pi = np.column_stack([tr.state("x", i), tr.state("y", i)])
+            for j in range(i + 1, N):
+                pj = np.column_stack([tr.state("x", j), tr.state("y", j)])
+                d = np.linalg.norm(pi - pj, axis=1)
+                out[(names[i], names[j])] = np.where(mask[:, i] & mask[:, j], d, np.nan)
+            for k, o in enumerate(self.scenario.obstacles):
+                d = np.linalg.norm(pi - np.asarray(o.position), axis=1)
+                out[(names[i], f"obstacle{k}")] = np.where(mask[:, i], d, np.nan)
+        return out
+
+    def own_distance(self) -> np.ndarray:
+        """Distance from the own ship to its nearest other agent over time."""
+        own = self.names()[0]
+        ds = [d for (a, b), d in self.pair_distances().items() if a == own or b == own]
+        if not ds:
+            return np.full(len(self.trajectory.t), np.inf)
+        d = np.vstack(ds)
+        return np.min(np.where(np.isnan(d), np.inf, d), axis=0)
+
+
+def run_scenario(scenario, params: dict | None = None, *, method: str | None = None,
+                 profile=None) -> ScenarioResult:
+    """Simulate a scenario in the compiled closed loop and assess it.
+
+    Parameters
+    ----------
+    scenario : Scenario, str or Path
+        A scenario, or the path of a scenario TOML file (:func:`~mmg_casadi.scenarios.scenario.load_scenario`); a file
+        name that does not exist but names a shipped scenario (``"head_on.toml"``) loads that one
+        (:func:`packaged_scenario`).
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`); they win over the scenario's
+        ``[settings]``.
+    method : str, optional
+        Replace the scenario's ``settings.method`` (per-ship overrides are kept).
+    profile : ColregProfile or str, optional
+        COLREG threshold profile of the assessment or its name (default: the paper laboratory's).
+
+    Returns
+    -------
+    ScenarioResult
+        ``.metrics`` (the schema above), ``.trajectory``, ``.plot()``, ``.to_frame()``, ``.save(dir)``.
+
+    Examples
+    --------
+    >>> r = run_scenario(packaged_scenario("head_on"), params={"t_max": 5.0})
+    >>> r.metrics["params"]["t_max"], r.metrics["ships"][0]["status"]
+    (5.0, 'timeout')
+    """
+    if isinstance(scenario, Scenario):
+        sc = scenario
+    else:
+        path = Path(scenario)
+        shipped = path.suffix == ".toml" and path.parent == Path(".") and not path.exists()
+        sc = packaged_scenario(path.stem) if shipped and path.stem in _packaged_names() else load_scenario(path)
+    if method is not None:
+        sc = with_method(sc, method)
+    problem = build_problem(sc, params)
+    traj = simulate(problem.layout, problem.x0, problem.p)
+    return assess(sc, traj, problem.params, profile=profile)
+
+
+def _packaged_names() -> list[str]:
+    from importlib import resources
+    return sorted(p.name[:-5] for p in resources.files("mmg_casadi").joinpath("data", "scenarios").iterdir()
+                  if p.name.endswith(".toml"))
+
+
+def packaged_scenario(name: str) -> Scenario:
+    """A scenario shipped in ``mmg_casadi/data/scenarios/<name>.toml`` (head_on, crossing, overtaking, conflict,
+    static_obstacle, narrow_channel).
+
+    Parameters
+    ----------
+    name : str
+        File name without ``.toml``.
+
+    Examples
+    --------
+    >>> [s.name for s in packaged_scenario("crossing").ships]
+    ['ship1', 'ship2']
+    """
+    from importlib import resources
+    names = _packaged_names()
+    if name not in names:
+        raise InputError("scenario", f"one of: {', '.join(names)}", name)
+    return load_scenario(resources.files("mmg_casadi").joinpath("data", "scenarios", f"{name}.toml"))
+
+
+def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResult:
+    """Metrics of a trajectory: per-ship outcome, CE, MCTE, collisions; per-pair closest approach and COLREGs.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The simulated scenario.
+    traj : Trajectory
+        Its rollout.
+    params : dict
+        The resolved parameter set it ran with (:func:`mmg_casadi.params.resolve`).
+    profile : ColregProfile or str, optional
+        COLREG threshold profile or its name (:data:`mmg_casadi.colregs.classify.PROFILES`; default: the paper
+        laboratory's).
+    """
+    from mmg_casadi.closed_loop.step import ClosedLoopModel
+    profile = colregs.get_profile(profile)
+    g = {k: params[k] for k in ("r_safe", "collision_distance")}
+    names = [s.name for s in sc.ships]
+    N = len(names)
+    S = len(sc.obstacles)
+    agent_names = names + [f"obstacle{k}" for k in range(S)]
+    mask = traj.sailing_mask()
+    t_end = float(traj.t[-1])
+    final = np.concatenate([[t_end], traj.final.ravel()])
+    ships = []
+    for i, (s, o) in enumerate(zip(sc.ships, ClosedLoopModel(traj.layout, params).outcomes(final))):
+        ships.append({
+            "name": s.name,
+            "method": traj.layout.methods[i],
+            "status": o["status"],
+            "reached_goal": o["status"] == "reached",
+            "time_to_goal": o["time_to_goal"],
+            "ce": o["ce"],
+            "mcte": o["mcte"],
+            "collided": o["collision_time"] is not None,
+            "collision_time": o["collision_time"],
+            "collision_with": None if o["collision_with"] is None else agent_names[o["collision_with"]],
+            "min_distance": o["min_distance"],
+            "stalled_at": None if o["stalled_at"] is None else list(o["stalled_at"]),
+            "reactive_time": o["reactive_time"],
+        })
+    pairs = []
+    labels: dict = {}
+    for i in range(N):
+        pi = np.column_stack([traj.state("x", i), traj.state("y", i)])
+        for j in range(i + 1, N):
+            pj = np.column_stack([traj.state("x", j), traj.state("y", j)])
+            a = colregs.assess_pair(traj.t, pi, traj.state("psi", i), pj, traj.state("psi", j),
+                                    r_safe=g["r_safe"], collision_distance=g["collision_distance"],
+                                    profile=profile, active_a=mask[:, i], active_b=mask[:, j])
+            pairs.append({"a": names[i], "b": names[j], "min_distance": float(a.min_distance),
+                          "t_min": float(a.t_min), "encounter": a.encounter, "compliant": a.compliant,
+                          "encounter_b": a.encounter_b, "compliant_b": a.compliant_b,
+                          "t_enter": None if a.t_enter is None else float(a.t_enter), "rules": a.rules})
+            for k, enc, ok in ((i, a.encounter, a.compliant), (j, a.encounter_b, a.compliant_b)):
+                if enc not in (None, "none"):
+                    tag = f"{enc} {'✓' if ok else '✗' if ok is not None else ''}".strip()
+                    labels[k] = ", ".join(filter(None, [labels.get(k), tag]))
+        for k, o in enumerate(sc.obstacles):
+            d = np.linalg.norm(pi - np.asarray(o.position), axis=1)
+            d = np.where(mask[:, i], d, np.inf)
+            kmin = int(np.argmin(d))
+            pairs.append({"a": names[i], "b": f"obstacle{k}", "min_distance": float(d[kmin]),
+                          "t_min": float(traj.t[kmin]), "encounter": "static" if d[kmin] <= g["r_safe"] else "none",
+                          "compliant": None, "encounter_b": None, "compliant_b": None, "t_enter": None})
+    collision = any(p["min_distance"] < g["collision_distance"] for p in pairs)
+    metrics = {"method": sc.settings.method, "collision": bool(collision), "t_end": t_end,
+               "params": dict(params), "ships": ships, "pairs": pairs}
+    return ScenarioResult(sc, traj, json_safe(metrics), labels)
+
+
+def write_outputs(res: ScenarioResult, out, *, figure_name: str = "scenario.png", tracking: bool = False) -> None:
+    """Write ``trajectory.npz``, ``trajectory.csv``, ``metrics.json`` and the figure into ``out``.
+
+    Parameters
+    ----------
+    res : ScenarioResult
+        The result to save.
+    out : str or Path
+        Output directory (created).
+    figure_name : str
+        File name of the figure.
+    tracking : bool
+        Draw the waypoint-tracking figure instead of the encounter figure.
+    """
+    from mmg_casadi.plotting import plot_scenario, plot_tracking
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    res.trajectory.to_npz(out / "trajectory.npz")
+    res.trajectory.to_csv(out / "trajectory.csv", names=res.names())
+    (plot_tracking if tracking else plot_scenario)(res, out / figure_name)
+    write_json(out / "metrics.json", res.metrics)

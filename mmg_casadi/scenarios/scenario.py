@@ -1,0 +1,744 @@
+"""Scenario files: ships, static obstacles and channel walls of one encounter (TOML, read with :mod:`tomllib`).
+
+Conventions: positions in ship lengths L, x forward/north and y to starboard/east, headings in degrees measured
+from x towards y (clockwise in the marine view, x up and y right), speeds as fractions of the design speed,
+times non-dimensional (L/U). A scenario file looks like::
+
+    [settings]
+    method = "modified-vortex"   # inverse-square | sink-vortex | modified-vortex | velocity-obstacle | none
+    dt = 0.25                    # guidance step
+    t_max = 300.0                # horizon
+    r_safe = 15.0                # L, safe radius
+    collision_distance = 2.0     # L, ship centres closer than this collide
+    [[ships]]                    # the first ship is the own ship
+    name = "own"
+    start = [0.0, 0.0]
+    heading = 0.0                # degrees from x towards y
+    speed = 1.0                  # fraction of design speed
+    waypoints = [[50.0, 0.0]]
+    # method = "none"            # optional per-ship override of settings.method
+    # stays = false              # optional: after reaching its goal the ship stays as an obstacle
+    [[obstacles]]
+    position = [25.0, 0.0]
+    radius = 0.5
+    [[walls]]
+    points = [[0.0, 5.0], [50.0, 55.0]]   # polyline; each consecutive pair of points is one wall segment
+    [environment]                # optional; calm water without it
+    current_speed = 0.1          # fraction of design speed, [0, 1]
+    current_direction = 90.0     # degrees, the direction the current flows TOWARDS
+    wind_speed = 15.0            # m/s, [0, 60]
+    wind_direction = -90.0       # degrees, the direction the wind comes FROM
+    # crab_compensation = "on"   # ILOS steers the course over the ground (default "off")
+
+The ``[environment]`` keys are aliases of the table parameters ``current_speed``, ``current_direction_deg``,
+``wind_speed``, ``wind_direction_deg`` and ``crab_compensation`` (:data:`ENVIRONMENT_KEYS`), which ``[settings]``,
+``--params``, ``--set`` and ``params=`` accept as well; giving one in both tables is an error. The model is
+described in :mod:`mmg_casadi.vessel.environment`: the ship's ``u, v`` are velocities through the water, the current
+carries it over the ground, the wind load comes from Blendermann (1994).
+
+Besides ``method``, ``[settings]`` accepts every parameter of the table :data:`mmg_casadi.params.PARAMETERS`
+(range-checked here); ``dt``, ``t_max``, ``r_safe``, ``collision_distance`` and ``goal_tolerance`` are fields of
+:class:`Settings`, the others are kept in :attr:`Settings.params`.
+
+Every malformed entry raises one :class:`~mmg_casadi.errors.ScenarioError` whose ``field`` is the dotted key
+(``ships[1].speed``, ``settings.method``, ``obstacles[0].position``) and whose message lists the allowed values.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from mmg_casadi.guidance import methods
+from mmg_casadi.errors import ParameterError, ScenarioError, check_range
+from mmg_casadi.params import PARAMETERS, check_value, resolve
+
+SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_tolerance")
+"""Table parameters that are fields of :class:`Settings`."""
+PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
+"""Table parameters kept in :attr:`Settings.params`."""
+SETTINGS_KEYS = ("method",) + tuple(PARAMETERS)
+SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays")
+OBSTACLE_KEYS = ("position", "radius")
+WALL_KEYS = ("points",)
+TOP_KEYS = ("settings", "ships", "obstacles", "walls", "environment")
+ENVIRONMENT_KEYS = {"current_speed": "current_speed", "current_direction": "current_direction_deg",
+                    "wind_speed": "wind_speed", "wind_direction": "wind_direction_deg",
+                    "crab_compensation": "crab_compensation"}
+"""Keys of the optional ``[environment]`` table and the table parameter each one sets."""
+SPEED_RANGE = (0.2, 1.2)
+"""Allowed ``speed`` of a ship (``[[ships]]`` table), (low, high) as fractions of the design speed, inclusive."""
+SHIP_HALF_LENGTH = 0.5
+
+_POINT = "a point [x, y] of two finite numbers (ship lengths)"
+
+
+def _as_point(p) -> tuple[float, float]:
+    """``p`` as a tuple of two floats."""
+    return (float(p[0]), float(p[1]))
+
+
+def _as_points(ps) -> tuple[tuple[float, float], ...]:
+    """``ps`` as a tuple of points."""
+    return tuple(_as_point(p) for p in ps)
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Scenario-wide settings.
+
+    ``method``: collision-avoidance method, a name in :data:`mmg_casadi.guidance.methods.METHODS`; ``dt``: guidance step (non-dimensional time,
+    rudder command held over the step); ``t_max``: horizon (non-dimensional time); ``r_safe``: safe radius
+    inside which other ships and obstacles act (L); ``collision_distance``: ship centres closer than this
+    collide (L); ``goal_tolerance``: goal reached within this distance (L); ``params``: optional field and
+    guidance parameter overrides (keys from :data:`PARAM_KEYS`; ``params`` is left out of the hash).
+
+    Parameters
+    ----------
+    method : str
+        Collision-avoidance method, a name in :data:`mmg_casadi.guidance.methods.METHODS`.
+    dt : float, optional
+        Guidance step (L/U); the rudder command is held over the step.
+    t_max : float, optional
+        Horizon (L/U).
+    r_safe : float, optional
+        Safe radius inside which other ships and obstacles act (L).
+    collision_distance : float, optional
+        Ship centres closer than this collide (L).
+    goal_tolerance : float, optional
+        A goal is reached within this distance (L).
+    params : dict, optional
+        Field and guidance parameter overrides (keys from :data:`PARAM_KEYS`).
+
+    Examples
+    --------
+    >>> Settings("none").dt, Settings("none").params
+    (0.25, {})
+    """
+
+    method: str
+    dt: float = PARAMETERS["dt"].default
+    t_max: float = PARAMETERS["t_max"].default
+    r_safe: float = PARAMETERS["r_safe"].default
+    collision_distance: float = PARAMETERS["collision_distance"].default
+    goal_tolerance: float = PARAMETERS["goal_tolerance"].default
+    params: dict = field(default_factory=dict, hash=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "params", dict(self.params))
+
+    def resolved(self, overrides: dict | None = None, *, cls=ParameterError) -> dict:
+        """The full parameter set of this scenario: table defaults, these settings, then ``overrides``.
+
+        Parameters
+        ----------
+        overrides : dict or None, optional
+            Parameter values (table names) applied last.
+        cls : type, default ParameterError
+            Exception class raised for an invalid value.
+
+        Examples
+        --------
+        >>> Settings("none", r_safe=10.0).resolved({"kp": 2.0})["r_safe"]
+        10.0
+        """
+        own = {k: getattr(self, k) for k in SETTINGS_FIELDS}
+        return resolve(own, self.params, overrides, cls=cls)
+
+
+@dataclass(frozen=True)
+class ShipSpec:
+    """One ship: ``name``; ``start`` position (L); ``heading_deg`` initial heading (degrees from x towards y);
+    ``speed`` as a fraction of the design speed; ``waypoints`` (L, the last one is the goal); ``method`` an
+    optional override of :attr:`Settings.method`; ``stays``: after reaching its goal the ship stays there as an
+    obstacle (otherwise it leaves the scenario).
+
+    Parameters
+    ----------
+    name : str
+        Name of the ship.
+    start : tuple of float
+        Start position (x, y) (L).
+    heading_deg : float
+        Initial heading (degrees from x towards y).
+    speed : float
+        Initial speed as a fraction of the design speed.
+    waypoints : sequence of (float, float)
+        Waypoints (L); the last one is the goal.
+    method : str or None, optional
+        Collision-avoidance method of this ship (default: :attr:`Settings.method`).
+    stays : bool, optional
+        Whether the ship stays at its goal as an obstacle after reaching it.
+
+    Examples
+    --------
+    >>> s = ShipSpec("own", [0, 0], 90, 1.0, [[50, 0]])
+    >>> s.start, s.goal, round(s.heading_rad, 4)
+    ((0.0, 0.0), (50.0, 0.0), 1.5708)
+    """
+
+    name: str
+    start: tuple[float, float]
+    heading_deg: float
+    speed: float
+    waypoints: tuple[tuple[float, float], ...]
+    method: str | None = None
+    stays: bool = False
+
+    def __post_init__(self):
+        object.__setattr__(self, "start", _as_point(self.start))
+        object.__setattr__(self, "heading_deg", float(self.heading_deg))
+        object.__setattr__(self, "speed", float(self.speed))
+        object.__setattr__(self, "waypoints", _as_points(self.waypoints))
+
+    @property
+    def heading_rad(self) -> float:
+        """Initial heading in rad (from x towards y)."""
+        return math.radians(self.heading_deg)
+
+    @property
+    def goal(self) -> tuple[float, float]:
+        """The last waypoint (L)."""
+        return self.waypoints[-1]
+
+
+@dataclass(frozen=True)
+class ObstacleSpec:
+    """A static circular obstacle: centre ``position`` (L) and ``radius`` (L).
+
+    Parameters
+    ----------
+    position : tuple of float
+        Centre (x, y) of the obstacle (L).
+    radius : float, default 0.5
+        Radius of the obstacle (L).
+
+    Examples
+    --------
+    >>> ObstacleSpec([25, 0])
+    ObstacleSpec(position=(25.0, 0.0), radius=0.5)
+    """
+
+    position: tuple[float, float]
+    radius: float = 0.5
+
+    def __post_init__(self):
+        object.__setattr__(self, "position", _as_point(self.position))
+        object.__setattr__(self, "radius", float(self.radius))
+
+
+@dataclass(frozen=True)
+class WallSpec:
+    """A channel wall: a polyline of at least two ``points`` (L); each consecutive pair is one segment.
+
+    Parameters
+    ----------
+    points : sequence of (float, float)
+        Vertices of the polyline, at least two (L).
+
+    Examples
+    --------
+    >>> WallSpec([[0, 5], [50, 55], [60, 55]]).segments
+    (((0.0, 5.0), (50.0, 55.0)), ((50.0, 55.0), (60.0, 55.0)))
+    """
+
+    points: tuple[tuple[float, float], ...]
+
+    def __post_init__(self):
+        object.__setattr__(self, "points", _as_points(self.points))
+
+    @property
+    def segments(self) -> tuple[tuple[tuple[float, float], tuple[float, float]], ...]:
+        """The wall segments as pairs of end points (L)."""
+        return tuple(zip(self.points[:-1], self.points[1:]))
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A whole scenario (tuples throughout, so a scenario is hashable).
+
+    Parameters
+    ----------
+    settings : Settings
+        Method and parameters.
+    ships : sequence of ShipSpec
+        The ships; the first is the own ship.
+    obstacles : sequence of ObstacleSpec
+        Static circular obstacles.
+    walls : sequence of WallSpec
+        Channel walls.
+
+    Examples
+    --------
+    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> s.ships[0].name, s.obstacles, s.method_of(0)
+    ('own', (), 'none')
+    """
+
+    settings: Settings
+    ships: tuple[ShipSpec, ...]
+    obstacles: tuple[ObstacleSpec, ...] = ()
+    walls: tuple[WallSpec, ...] = ()
+
+    def __post_init__(self):
+        for name in ("ships", "obstacles", "walls"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+
+    def method_of(self, i: int) -> str:
+        """The method ship ``i`` uses: its own override, else :attr:`Settings.method`.
+
+        Parameters
+        ----------
+        i : int
+            Ship index (0 is the own ship).
+        """
+        own = self.ships[i].method
+        return self.settings.method if own is None else own
+
+
+def toml_key(k: str) -> str:
+    r"""``k`` as written in a dotted TOML key: bare if it may be, else a quoted string (so it fits on one line).
+
+    Parameters
+    ----------
+    k : str
+        One key (one part of a dotted key). It stays bare if it is non-empty and only ASCII letters, digits,
+        ``_`` and ``-``; otherwise it becomes a JSON-escaped (hence valid TOML basic) string in double quotes.
+
+    Returns
+    -------
+    str
+        The key as TOML text.
+
+    Examples
+    --------
+    >>> toml_key("speed"), toml_key(""), toml_key("a\nb")
+    ('speed', '""', '"a\\nb"')
+    """
+    if k and all(c.isascii() and (c.isalnum() or c in "_-") for c in k):
+        return k
+    return json.dumps(k)
+
+
+def _table(value, key: str, allowed_keys) -> dict:
+    """``value`` as a table whose keys all lie in ``allowed_keys`` (``key`` is its dotted name, "" for the root)."""
+    if not isinstance(value, dict):
+        raise ScenarioError(key or "scenario", "a table", value)
+    for k in value:
+        if k not in allowed_keys:
+            name = toml_key(k)
+            raise ScenarioError(f"{key}.{name}" if key else name, f"a known key (one of: {', '.join(allowed_keys)})")
+    return value
+
+
+def _tables(d: dict, key: str, allowed_keys, *, required: bool) -> list[dict]:
+    """The array of tables ``d[key]`` (empty if absent and not ``required``)."""
+    if key not in d:
+        if required:
+            raise ScenarioError(key, f"at least one [[{key}]] table (required)")
+        return []
+    value = d[key]
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        raise ScenarioError(key, f"an array of tables [[{key}]]", value)
+    if required and not value:
+        raise ScenarioError(key, f"at least one [[{key}]] table (required)", value)
+    return [_table(v, f"{key}[{i}]", allowed_keys) for i, v in enumerate(value)]
+
+
+def _required(d: dict, key: str, prefix: str, allowed: str):
+    """``d[key]``, or a ScenarioError naming ``prefix.key`` if it is missing."""
+    if key not in d:
+        raise ScenarioError(f"{prefix}.{key}", f"{allowed} (a required key, missing here)")
+    return d[key]
+
+
+def _is_number(value) -> bool:
+    """True for a finite int or float (not a bool; an int too large for a float is not finite)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
+def _number(value, key: str, allowed: str = "a finite number") -> float:
+    """``value`` as a float if it is a finite number."""
+    if not _is_number(value):
+        raise ScenarioError(key, allowed, value)
+    return float(value)
+
+
+def _range_text(key: str, low, high, **kw) -> str:
+    """The ``allowed`` text :func:`check_range` gives for this interval."""
+    try:
+        check_range(key, math.nan, low, high, cls=ScenarioError, **kw)
+    except ScenarioError as err:
+        return err.allowed
+    raise AssertionError("check_range accepted nan")
+
+
+def _ranged(value, key: str, low=None, high=None, **kw) -> float:
+    """``value`` as a float if it is a finite number (not a bool or a string) in the given interval."""
+    if not _is_number(value):
+        raise ScenarioError(key, _range_text(key, low, high, **kw), value)
+    return check_range(key, value, low, high, cls=ScenarioError, **kw)
+
+
+def _string(value, key: str, allowed=None) -> str:
+    """``value`` if it is a (non-empty) string, optionally one of ``allowed``."""
+    if allowed is not None:
+        if not isinstance(value, str) or value not in allowed:
+            raise ScenarioError(key, f"one of: {', '.join(allowed)}", value)
+        return value
+    if not isinstance(value, str) or not value:
+        raise ScenarioError(key, "a non-empty string", value)
+    return value
+
+
+def _point(value, key: str) -> tuple[float, float]:
+    """``value`` as a point: a list of two finite numbers."""
+    if not isinstance(value, (list, tuple)) or len(value) != 2 or not all(_is_number(v) for v in value):
+        raise ScenarioError(key, _POINT, value)
+    return _as_point(value)
+
+
+def _points(value, key: str, min_count: int) -> tuple[tuple[float, float], ...]:
+    """``value`` as a tuple of at least ``min_count`` points."""
+    if not isinstance(value, (list, tuple)) or len(value) < min_count:
+        noun = "point" if min_count == 1 else "points"
+        raise ScenarioError(key, f"a list of at least {min_count} {noun} [[x, y], ...] (ship lengths)", value)
+    return tuple(_point(p, f"{key}[{j}]") for j, p in enumerate(value))
+
+
+def _settings(d: dict) -> Settings:
+    """Validated [settings] table (every parameter range-checked against the table)."""
+    if "settings" not in d:
+        raise ScenarioError("settings", "a [settings] table (required)")
+    s = _table(d["settings"], "settings", SETTINGS_KEYS)
+    method = _string(_required(s, "method", "settings", f"one of: {', '.join(methods.NAMES)}"), "settings.method",
+                     methods.NAMES)
+    values = {k: check_value(k, v, field=f"settings.{k}", cls=ScenarioError) for k, v in s.items()
+              if k != "method"}
+    values.update(_environment(d, values))
+    kw = {k: values.pop(k) for k in SETTINGS_FIELDS if k in values}
+    return Settings(method, params=values, **kw)
+
+
+def _environment(d: dict, settings: dict) -> dict:
+    """Table parameters from the optional [environment] table (checked; none may repeat a [settings] key)."""
+    if "environment" not in d:
+        return {}
+    env = _table(d["environment"], "environment", tuple(ENVIRONMENT_KEYS))
+    out = {}
+    for k, v in env.items():
+        name = ENVIRONMENT_KEYS[k]
+        if name in settings:
+            raise ScenarioError(f"environment.{k}", f"a value given once (settings.{name} gives it already)", v)
+        out[name] = check_value(name, v, field=f"environment.{k}", cls=ScenarioError)
+    return out
+
+
+def _ship(t: dict, i: int) -> ShipSpec:
+    """Validated ``ships[i]`` table."""
+    p = f"ships[{i}]"
+    name = _string(t["name"], f"{p}.name") if "name" in t else f"ship{i}"
+    start = _point(_required(t, "start", p, _POINT), f"{p}.start")
+    heading = _number(_required(t, "heading", p, "a finite number of degrees"), f"{p}.heading",
+                      "a finite number of degrees")
+    lo, hi = SPEED_RANGE
+    unit = "(fraction of design speed)"
+    speed = _ranged(_required(t, "speed", p, _range_text(f"{p}.speed", lo, hi, unit=unit)), f"{p}.speed", lo, hi,
+                    unit=unit)
+    waypoints = _points(_required(t, "waypoints", p, "a list of waypoints [[x, y], ...]"), f"{p}.waypoints", 1)
+    method = _string(t["method"], f"{p}.method", methods.NAMES) if "method" in t else None
+    stays = t.get("stays", False)
+    if not isinstance(stays, bool):
+        raise ScenarioError(f"{p}.stays", "true or false", stays)
+    return ShipSpec(name, start, heading, speed, waypoints, method, stays)
+
+
+def _obstacle(t: dict, i: int) -> ObstacleSpec:
+    """Validated ``obstacles[i]`` table."""
+    p = f"obstacles[{i}]"
+    position = _point(_required(t, "position", p, _POINT), f"{p}.position")
+    if "radius" not in t:
+        return ObstacleSpec(position)
+    return ObstacleSpec(position, _ranged(t["radius"], f"{p}.radius", 0.0, None, low_open=True, unit="L"))
+
+
+def _wall(t: dict, i: int) -> WallSpec:
+    """Validated ``walls[i]`` table."""
+    key = f"walls[{i}].points"
+    points = _points(_required(t, "points", f"walls[{i}]", "a list of at least 2 points"), key, 2)
+    for j in range(1, len(points)):
+        if points[j] == points[j - 1]:
+            raise ScenarioError(f"{key}[{j}]", "a point different from the previous one", list(points[j]))
+    return WallSpec(points)
+
+
+def _check_starts(ships, obstacles, collision_distance: float) -> None:
+    """Ship starts must lie outside every obstacle (radius + half a ship length) and apart from each other."""
+    names = {}
+    for i, ship in enumerate(ships):
+        if ship.name in names:
+            raise ScenarioError(f"ships[{i}].name", f"a name not already used by ships[{names[ship.name]}]",
+                                ship.name)
+        names[ship.name] = i
+        for j, ob in enumerate(obstacles):
+            limit = ob.radius + SHIP_HALF_LENGTH
+            if math.dist(ship.start, ob.position) < limit:
+                raise ScenarioError(f"ships[{i}].start", f"a start at least {limit:g} L (radius + 0.5 L) from "
+                                    f"the centre of obstacles[{j}], not inside it", list(ship.start))
+        for j in range(i):
+            if math.dist(ship.start, ships[j].start) < collision_distance:
+                raise ScenarioError(f"ships[{i}].start", f"a start at least collision_distance = "
+                                    f"{collision_distance:g} L from ships[{j}].start", list(ship.start))
+
+
+def scenario_from_dict(d: dict, source: str = "<dict>") -> Scenario:
+    """A validated :class:`Scenario` from a dict shaped like a scenario file.
+
+    ``source`` (a file name) is stored as the ``source`` attribute of any :class:`ScenarioError` raised.
+
+    Parameters
+    ----------
+    d : dict
+        Scenario data shaped like a scenario file.
+    source : str, default '<dict>'
+        Name of the source (a file name) stored in any :class:`ScenarioError` raised.
+
+    Examples
+    --------
+    >>> d = {"settings": {"method": "none"},
+    ...      "ships": [{"start": [0, 0], "heading": 0, "speed": 1, "waypoints": [[50, 0]]}]}
+    >>> scenario_from_dict(d).ships[0].name
+    'ship0'
+    >>> d["ships"][0]["speed"] = 2
+    >>> scenario_from_dict(d)
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.ScenarioError: ships[0].speed: expected a number in [0.2, 1.2] (fraction of design speed), got 2
+    """
+    try:
+        table = _table(d, "", TOP_KEYS)
+        settings = _settings(table)
+        ships = tuple(_ship(t, i) for i, t in enumerate(_tables(table, "ships", SHIP_KEYS, required=True)))
+        obstacles = tuple(_obstacle(t, i) for i, t in
+                          enumerate(_tables(table, "obstacles", OBSTACLE_KEYS, required=False)))
+        walls = tuple(_wall(t, i) for i, t in enumerate(_tables(table, "walls", WALL_KEYS, required=False)))
+        _check_starts(ships, obstacles, settings.collision_distance)
+    except ScenarioError as err:
+        err.source = source
+        raise
+    return Scenario(settings, ships, obstacles, walls)
+
+
+def load_scenario(path) -> Scenario:
+    """Read and validate a scenario TOML file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (see the module docstring for its keys).
+
+    Raises
+    ------
+    ScenarioError
+        A missing or unreadable file: its field is the path; a TOML syntax error: its field is ``"toml"`` and
+        its message carries the parser's message.
+
+    Examples
+    --------
+    >>> from importlib.resources import files
+    >>> s = load_scenario(files("mmg_casadi") / "data" / "scenarios" / "head_on.toml")
+    >>> [ship.start for ship in s.ships]
+    [(0.0, 0.0), (50.0, 0.0)]
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise ScenarioError(str(path), "an existing, readable scenario file", err.strerror or str(err)) from None
+    except UnicodeDecodeError as err:
+        raise ScenarioError("toml", f"UTF-8 text in {path}", str(err)) from None
+    try:
+        d = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ScenarioError("toml", f"valid TOML in {path}", str(err)) from None
+    return scenario_from_dict(d, source=str(path))
+
+
+def with_method(s: Scenario, method: str) -> Scenario:
+    """``s`` with ``settings.method`` replaced (per-ship overrides are kept).
+
+    Parameters
+    ----------
+    s : Scenario
+        The scenario.
+    method : str
+        Name of the new scenario-wide method.
+
+    Examples
+    --------
+    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> with_method(s, "sink-vortex").settings.method
+    'sink-vortex'
+    """
+    method = _string(method, "method", methods.NAMES)
+    return dataclasses.replace(s, settings=dataclasses.replace(s.settings, method=method))
+
+
+def with_params(s: Scenario, params: dict | None) -> Scenario:
+    """``s`` with parameter values written into its settings (so the scenario file carries them).
+
+    Parameters
+    ----------
+    s : Scenario
+        The scenario.
+    params : dict or None
+        Parameter values (table names) to write into the settings; ``None`` or empty returns ``s``.
+
+    Examples
+    --------
+    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> t = with_params(s, {"r_safe": 10.0, "kp": 2.0})
+    >>> t.settings.r_safe, t.settings.params
+    (10.0, {'kp': 2.0})
+    """
+    if not params:
+        return s
+    values = {k: check_value(k, v, field=f"params.{k}") for k, v in params.items()}
+    kw = {k: values.pop(k) for k in SETTINGS_FIELDS if k in values}
+    settings = dataclasses.replace(s.settings, params={**s.settings.params, **values}, **kw)
+    return dataclasses.replace(s, settings=settings)
+
+
+def _ship_dict(ship: ShipSpec) -> dict:
+    """One ship as a scenario-file table."""
+    d = {"name": ship.name, "start": list(ship.start), "heading": ship.heading_deg, "speed": ship.speed,
+         "waypoints": [list(p) for p in ship.waypoints]}
+    if ship.method is not None:
+        d["method"] = ship.method
+    d["stays"] = ship.stays
+    return d
+
+
+def scenario_to_dict(s: Scenario) -> dict:
+    """``s`` as a dict shaped like a scenario file (the inverse of :func:`scenario_from_dict`).
+
+    Parameters
+    ----------
+    s : Scenario
+        The scenario to convert.
+
+    Examples
+    --------
+    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> scenario_to_dict(s)["ships"][0]["waypoints"]
+    [[50.0, 0.0]]
+    >>> scenario_from_dict(scenario_to_dict(s)) == s
+    True
+    """
+    st = s.settings
+    settings = {"method": st.method, "dt": st.dt, "t_max": st.t_max, "r_safe": st.r_safe,
+                "collision_distance": st.collision_distance, "goal_tolerance": st.goal_tolerance}
+    settings.update({k: st.params[k] for k in PARAM_KEYS if k in st.params})
+    return {
+        "settings": settings,
+        "ships": [_ship_dict(ship) for ship in s.ships],
+        "obstacles": [{"position": list(ob.position), "radius": ob.radius} for ob in s.obstacles],
+        "walls": [{"points": [list(p) for p in w.points]} for w in s.walls],
+    }
+
+
+def _toml_string(text: str) -> str:
+    """``text`` as a TOML basic string."""
+    out = []
+    for ch in text:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_value(value) -> str:
+    """A TOML value: bool, int, float, string or (nested) array of these."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, str):
+        return _toml_string(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {type(value).__name__} as a TOML value")
+
+
+def _is_table_array(value) -> bool:
+    """True for a non-empty list of dicts (an array of tables)."""
+    return isinstance(value, list) and bool(value) and all(isinstance(v, dict) for v in value)
+
+
+def _toml_pairs(d: dict) -> list[str]:
+    """``key = value`` lines of a table holding only values."""
+    return [f"{k} = {_toml_value(v)}" for k, v in d.items()]
+
+
+def _dumps_toml(d: dict) -> str:
+    """A small TOML writer: root values, then tables, then arrays of tables (no deeper nesting)."""
+    lines = [f"{k} = {_toml_value(v)}" for k, v in d.items() if not isinstance(v, dict) and not _is_table_array(v)]
+    for k, v in d.items():
+        if isinstance(v, dict):
+            lines += ["", f"[{k}]"] + _toml_pairs(v)
+    for k, v in d.items():
+        if _is_table_array(v):
+            for item in v:
+                lines += ["", f"[[{k}]]"] + _toml_pairs(item)
+    return "\n".join(lines).lstrip("\n") + "\n"
+
+
+def dump_scenario(s: Scenario) -> str:
+    """``s`` as scenario-file TOML text; ``scenario_from_dict(tomllib.loads(dump_scenario(s))) == s``.
+
+    Empty ``obstacles`` and ``walls`` are left out.
+
+    Parameters
+    ----------
+    s : Scenario
+        The scenario to write.
+
+    Examples
+    --------
+    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> print(dump_scenario(s))
+    [settings]
+    method = "none"
+    dt = 0.25
+    t_max = 300.0
+    r_safe = 15.0
+    collision_distance = 2.0
+    goal_tolerance = 3.0
+    <BLANKLINE>
+    [[ships]]
+    name = "own"
+    start = [0.0, 0.0]
+    heading = 0.0
+    speed = 1.0
+    waypoints = [[50.0, 0.0]]
+    stays = false
+    <BLANKLINE>
+    >>> scenario_from_dict(tomllib.loads(dump_scenario(s))) == s
+    True
+    """
+    d = {k: v for k, v in scenario_to_dict(s).items() if v}
+    return _dumps_toml(d)

@@ -1,0 +1,1 @@
+"""The vessel model: ship data, the MMG equations, actuators, environmental disturbances, manoeuvres."""

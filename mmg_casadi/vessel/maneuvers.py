@@ -1,0 +1,268 @@
+"""Standard manoeuvres of the model: turning circle and zig-zag, rolled out with ``mapaccum`` in compiled code.
+
+Both start from straight running at the requested speed (propeller speed from
+:func:`~mmg_casadi.vessel.mmg.propeller_rpm_for_speed`); the rudder command goes through the steering gear.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from mmg_casadi.closed_loop.compiled import compile_function
+from mmg_casadi.errors import ParameterError, check_range
+from mmg_casadi.vessel.mmg import NX, STATE_NAMES, build_mmg, propeller_rpm_for_speed, rk4
+from mmg_casadi.vessel.ship import ShipParams, SteeringParams, load_kcs, load_steering
+
+DT = 0.05  #: integration step of the manoeuvres (non-dimensional time)
+
+IMO = {
+    # IMO MSC.137(76) for L/V = 18.6 s (see data/kcs_mmg.toml)
+    "advance_max": 4.5,
+    "tactical_diameter_max": 5.0,
+    "zigzag10_overshoot1_max": 14.3,
+    "zigzag10_overshoot2_max": 31.5,
+    "zigzag20_overshoot1_max": 25.0,
+}
+
+
+@dataclass
+class ManeuverResult:
+    """Time history and metrics of a manoeuvre.
+
+    ``states`` is ``(T, 7)`` in :data:`~mmg_casadi.vessel.mmg.STATE_NAMES` order, ``delta_c`` the commanded rudder
+    (rad), ``metrics`` the dictionary written to ``metrics.json``.
+
+    Parameters
+    ----------
+    kind : str
+        Manoeuvre name, ``'turning'`` or ``'zigzag'``.
+    t : numpy.ndarray
+        Sample times, shape ``(T,)`` (L/U).
+    states : numpy.ndarray
+        State history, shape ``(T, 7)``.
+    delta_c : numpy.ndarray
+        Commanded rudder angle at each sample, shape ``(T,)`` (rad).
+    metrics : dict, optional
+        Manoeuvre metrics (empty by default).
+    """
+
+    kind: str
+    t: np.ndarray
+    states: np.ndarray
+    delta_c: np.ndarray
+    metrics: dict = field(default_factory=dict)
+
+    def state(self, name: str) -> np.ndarray:
+        return self.states[:, STATE_NAMES.index(name)]
+
+
+def _zigzag_step(ship: ShipParams, steering: SteeringParams) -> ca.Function:
+    """Step of the zig-zag: the rudder command reverses once the heading passes ±angle (state ``sign``)."""
+    f = build_mmg(ship, steering)
+    x = ca.SX.sym("x", NX + 1)
+    p = ca.SX.sym("p", 4)  # angle (rad), n_rpm, dt, initial heading
+    angle, n, dt, psi0 = p[0], p[1], p[2], p[3]
+    sgn = x[NX]
+    dc = sgn * angle
+    xn = rk4(f, x[:NX], (dc, n), dt)
+    dpsi = xn[5] - psi0
+    sgn_n = ca.if_else(ca.logic_and(sgn > 0, dpsi >= angle), -1,
+                       ca.if_else(ca.logic_and(sgn < 0, dpsi <= -angle), 1, sgn))
+    return ca.Function("zigzag_step", [x, p], [ca.vertcat(xn, sgn_n), dc])
+
+
+def _turning_step(ship: ShipParams, steering: SteeringParams) -> ca.Function:
+    f = build_mmg(ship, steering)
+    x = ca.SX.sym("x", NX)
+    p = ca.SX.sym("p", 3)  # delta_c, n_rpm, dt
+    return ca.Function("turning_step", [x, p], [rk4(f, x, (p[0], p[1]), p[2]), p[0]])
+
+
+def _roll(step: ca.Function, x0, p, n_steps: int):
+    F = compile_function(step).mapaccum(n_steps)
+    X, U = F(x0, p)
+    X = np.hstack([np.asarray(x0, float)[:, None], np.array(X)])
+    return X, np.array(U).ravel()
+
+
+def turning_circle(rudder_deg: float = 35.0, *, port: bool = False, speed: float = 1.0, t_end: float = 60.0,
+                   ship: ShipParams | None = None, steering: SteeringParams | None = None) -> ManeuverResult:
+    """Turning circle with ``rudder_deg`` (magnitude, ≤ 35°) to starboard, or to port with ``port=True``.
+
+    Metrics (lengths in L): ``advance`` (forward travel at 90° heading change), ``transfer`` (sideways travel at
+    90°), ``tactical_diameter`` (sideways travel at 180°), ``x_min`` (smallest x after the 180° point),
+    ``steady_diameter``, ``final_speed`` (U/U_des), ``direction``.
+
+    Parameters
+    ----------
+    rudder_deg : float
+        Rudder angle magnitude (degrees, (0, 35]).
+    port : bool
+        Turn to port instead of starboard.
+    speed : float
+        Approach speed (fraction of the design speed, [0.2, 1.2]).
+    t_end : float
+        Duration (L/U).
+    ship, steering : ShipParams, SteeringParams, optional
+        Ship and steering gear (default: the KCS).
+
+    Examples
+    --------
+    >>> r = turning_circle(15)
+    >>> round(r.metrics["advance"], 1), round(r.metrics["tactical_diameter"], 1)
+    (5.2, 5.7)
+    """
+    ship = ship or load_kcs()
+    steering = steering or load_steering()
+    check_range("rudder", rudder_deg, 0.0, steering.delta_max_deg, low_open=True, unit="degrees")
+    check_range("speed", speed, 0.2, 1.2, unit="(fraction of design speed)")
+    n = propeller_rpm_for_speed(speed, ship)
+    sign = -1.0 if port else 1.0
+    x0 = [speed, 0, 0, 0, 0, 0, 0]
+    steps = int(round(t_end / speed / DT))
+    X, U = _roll(_turning_step(ship, steering), x0, [sign * math.radians(rudder_deg), n, DT], steps)
+    t = np.arange(X.shape[1]) * DT
+    res = ManeuverResult("turning", t, X.T, np.append(U, U[-1]))
+    res.metrics = turning_metrics(res, rudder_deg, port, speed)
+    return res
+
+
+def _crossing(t, y, level):
+    """Time and index where ``y`` first reaches ``level`` (linear interpolation)."""
+    k = int(np.argmax(y >= level))
+    if y[k] < level:
+        return None, None
+    if k == 0:
+        return t[0], 0
+    a = (level - y[k - 1]) / (y[k] - y[k - 1])
+    return t[k - 1] + a * (t[k] - t[k - 1]), k - 1 + a
+
+
+def _interp(arr, fidx):
+    k = int(fidx)
+    a = fidx - k
+    return arr[k] if a == 0 else (1 - a) * arr[k] + a * arr[k + 1]
+
+
+def turning_metrics(res: ManeuverResult, rudder_deg: float, port: bool, speed: float) -> dict:
+    """Advance, transfer, tactical diameter and steady turning of a turning-circle history.
+
+    Parameters
+    ----------
+    res : ManeuverResult
+        Turning-circle history (must reach 180° of heading change).
+    rudder_deg : float
+        Rudder angle of the turn (deg), recorded in the metrics.
+    port : bool
+        True for a turn to port, False to starboard.
+    speed : float
+        Approach speed (fraction of the design speed), recorded in the metrics.
+    """
+    psi = np.abs(res.state("psi"))
+    x, y = res.state("x"), res.state("y")
+    _, k90 = _crossing(res.t, psi, math.pi / 2)
+    _, k180 = _crossing(res.t, psi, math.pi)
+    if k90 is None or k180 is None:
+        raise RuntimeError("the turn did not reach 180 degrees of heading change; increase t_end")
+    k360 = _crossing(res.t, psi, 2 * math.pi)[1]
+    after = slice(int(k180), int(k360) if k360 is not None else len(psi))
+    u, v = res.state("u"), res.state("v")
+    return {
+        "maneuver": "turning",
+        "rudder_deg": float(rudder_deg),
+        "direction": "port" if port else "starboard",
+        "speed": float(speed),
+        "advance": float(_interp(x, k90)),
+        "transfer": float(abs(_interp(y, k90))),
+        "tactical_diameter": float(abs(_interp(y, k180))),
+        "x_min": float(np.min(x[after])),
+        "steady_diameter": float(np.max(x[after]) - np.min(x[after])),
+        "time_to_90": float(_interp(res.t, k90)),
+        "time_to_180": float(_interp(res.t, k180)),
+        "final_speed": float(np.hypot(u[-1], v[-1])),
+        "units": {"lengths": "L", "times": "L/U_des", "speed": "U/U_des"},
+    }
+
+
+def zigzag(angle_deg: float = 10.0, *, speed: float = 1.0, t_end: float = 40.0,
+           ship: ShipParams | None = None, steering: SteeringParams | None = None) -> ManeuverResult:
+    """Zig-zag ``angle_deg``/``angle_deg``, first to starboard.
+
+    Metrics (degrees): ``overshoot_1`` and ``overshoot_2`` — how far the heading goes beyond ±angle after the
+    first and second rudder reversals; times non-dimensional.
+
+    Parameters
+    ----------
+    angle_deg : float
+        Rudder angle and heading-change trigger (degrees, (0, 35]).
+    speed : float
+        Approach speed (fraction of the design speed, [0.2, 1.2]).
+    t_end : float
+        Duration (L/U).
+    ship, steering : ShipParams, SteeringParams, optional
+        Ship and steering gear (default: the KCS).
+
+    Examples
+    --------
+    >>> r = zigzag(10)
+    >>> 0 < r.metrics["overshoot_1"] < 14.3
+    True
+    """
+    ship = ship or load_kcs()
+    steering = steering or load_steering()
+    check_range("angle", angle_deg, 0.0, steering.delta_max_deg, low_open=True, unit="degrees")
+    check_range("speed", speed, 0.2, 1.2, unit="(fraction of design speed)")
+    n = propeller_rpm_for_speed(speed, ship)
+    a = math.radians(angle_deg)
+    steps = int(round(t_end / speed / DT))
+    X, U = _roll(_zigzag_step(ship, steering), [speed, 0, 0, 0, 0, 0, 0, 1.0], [a, n, DT, 0.0], steps)
+    t = np.arange(X.shape[1]) * DT
+    res = ManeuverResult("zigzag", t, X[:NX].T, np.append(U, U[-1]))
+    res.metrics = zigzag_metrics(res, X[NX], angle_deg)
+    return res
+
+
+def zigzag_metrics(res: ManeuverResult, sign: np.ndarray, angle_deg: float) -> dict:
+    """Overshoot angles and times of a zig-zag history with rudder-sign history ``sign``.
+
+    Parameters
+    ----------
+    res : ManeuverResult
+        Zig-zag history.
+    sign : numpy.ndarray
+        Rudder-command sign (±1) at each sample; needs three reversals.
+    angle_deg : float
+        Zig-zag rudder angle and heading trigger (deg).
+    """
+    psi = np.degrees(res.state("psi"))
+    rev = np.flatnonzero(np.diff(sign) != 0) + 1  # samples after each rudder reversal
+    if len(rev) < 3:
+        raise RuntimeError("fewer than three rudder reversals; increase t_end")
+    seg1 = psi[rev[0]:rev[1] + 1]
+    seg2 = psi[rev[1]:rev[2] + 1]
+    return {
+        "maneuver": "zigzag",
+        "angle_deg": float(angle_deg),
+        "overshoot_1": float(seg1.max() - angle_deg),
+        "overshoot_2": float(-seg2.min() - angle_deg),
+        "time_first_reversal": float(res.t[rev[0]]),
+        "time_overshoot_1": float(res.t[rev[0] + int(np.argmax(seg1))]),
+        "time_overshoot_2": float(res.t[rev[1] + int(np.argmin(seg2))]),
+        "units": {"angles": "deg", "times": "L/U_des"},
+    }
+
+
+def validate_maneuver_args(kind: str) -> None:
+    """Raise :class:`ParameterError` for an unknown manoeuvre name.
+
+    Parameters
+    ----------
+    kind : str
+        Manoeuvre name; ``'turning'`` or ``'zigzag'`` is accepted.
+    """
+    if kind not in ("turning", "zigzag"):
+        raise ParameterError("maneuver", "one of: turning, zigzag", kind)

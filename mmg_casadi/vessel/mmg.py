@@ -1,0 +1,387 @@
+"""3-DOF MMG manoeuvring model of the KCS in the prime-II system, as CasADi expressions.
+
+State ``x = [u, v, r, x, y, psi, delta]`` (velocities over U_des, yaw rate in U_des/L, positions in L, angles in
+rad); inputs: commanded rudder ``delta_c`` (rad) and propeller speed ``n_rpm`` (rev/min). The force model is the
+laboratory's form spelled out in the header of ``data/kcs_mmg.toml`` (drift-angle hull polynomial, design-speed
+scaling, constant wake), not the Yasukawa–Yoshimura 2015 standard form.
+
+With a disturbance input ``env = [V_c, beta_c, U_w, psi_w]`` (:mod:`mmg_casadi.vessel.environment`) the state's
+``u, v`` are velocities RELATIVE TO THE WATER; the position kinematics add the current and the wind load is added
+to the forces. Without it (the default) the model is the calm-water model, expression for expression.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from mmg_casadi.vessel.actuators import steering_rate
+from mmg_casadi.vessel.environment import NENV, Windage, current_kinematics, ground_velocity, wind_forces
+from mmg_casadi.vessel.ship import ShipParams, SteeringParams, load_kcs, load_steering
+
+#: The MMG state vector: surge, sway, yaw rate, position, heading, rudder angle (prime-II, rad).
+STATE_NAMES = ("u", "v", "r", "x", "y", "psi", "delta")
+INPUT_NAMES = ("delta_c", "n_rpm")
+NX = len(STATE_NAMES)
+
+
+def mass_matrix(ship: ShipParams) -> np.ndarray:
+    """Rigid-body plus added mass matrix of eq. (mmg_nd).
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    """
+    m, xg = ship.m, ship.xG_nd
+    return np.array([
+        [m + ship.mx, 0.0, 0.0],
+        [0.0, m + ship.my, m * xg],
+        [0.0, m * xg, ship.Izz + ship.Jzz],
+    ])
+
+
+def propeller_terms(ship: ShipParams, u, n_rpm):
+    """Advance ratio J, thrust coefficient K_T and non-dimensional propeller thrust X_P'.
+
+    ``J = u' U_des (1 - w_P)/(n D_P)``, ``K_T = k0 + k1 J + k2 J²``, ``X_P = (1 - t_P) ρ K_T n² D_P⁴`` over
+    ½ρU_des²Ld.
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    u : float or casadi.SX or casadi.MX
+        Non-dimensional surge velocity u' (units of U_des).
+    n_rpm : float or casadi.SX or casadi.MX
+        Propeller speed (rev/min).
+    """
+    n = n_rpm / 60.0
+    J = u * ship.U_design * (1.0 - ship.wP) / (n * ship.DP)
+    KT = ship.k0 + ship.k1 * J + ship.k2 * J**2
+    XP = (1.0 - ship.tP) * KT * n**2 * ship.DP**4 / (0.5 * ship.L * ship.d * ship.U_design**2)
+    return J, KT, XP
+
+
+def hull_forces(ship: ShipParams, u, v, r):
+    """Hull forces X_H', Y_H', N_H' as polynomials in the drift angle β = atan2(-v', u') and r'.
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    u : float or casadi.SX or casadi.MX
+        Non-dimensional surge velocity u' (units of U_des).
+    v : float or casadi.SX or casadi.MX
+        Non-dimensional sway velocity v' (units of U_des).
+    r : float or casadi.SX or casadi.MX
+        Non-dimensional yaw rate r' (rad per unit time L/U).
+    """
+    b = ca.atan2(-v, u)
+    XH = ship.X0 * u**2 + ship.Xbb * b**2 + ship.Xbr_minus_my * b * r + ship.Xrr * r**2 + ship.Xbbbb * b**4
+    YH = (ship.Yb * b + ship.Yr_minus_mx * r + ship.Ybbb * b**3 + ship.Ybbr * b**2 * r + ship.Ybrr * b * r**2
+          + ship.Yrrr * r**3)
+    NH = (ship.Nb * b + ship.Nr * r + ship.Nbbb * b**3 + ship.Nbbr * b**2 * r + ship.Nbrr * b * r**2
+          + ship.Nrrr * r**3)
+    return XH, YH, NH
+
+
+def rudder_forces(ship: ShipParams, u, v, r, delta, n_rpm):
+    """Rudder forces X_R', Y_R', N_R' and the rudder inflow (u_R', v_R', α_R).
+
+    The propeller-slipstream factor is written as ``u'(1 + κ(√(1 + 8K_T/(πJ²)) - 1))
+    = u'(1 - κ) + κ √(u'² + 8K_T (u'/J)²/π)`` so that it stays finite at u' = 0.
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    u : float or casadi.SX or casadi.MX
+        Non-dimensional surge velocity u' (units of U_des).
+    v : float or casadi.SX or casadi.MX
+        Non-dimensional sway velocity v' (units of U_des).
+    r : float or casadi.SX or casadi.MX
+        Non-dimensional yaw rate r' (rad per unit time L/U).
+    delta : float or casadi.SX or casadi.MX
+        Rudder angle δ (rad).
+    n_rpm : float or casadi.SX or casadi.MX
+        Propeller speed (rev/min).
+    """
+    J, KT, _ = propeller_terms(ship, u, n_rpm)
+    u_over_J = (n_rpm / 60.0) * ship.DP / (ship.U_design * (1.0 - ship.wP))
+    slip = u * (1.0 - ship.kappa) + ship.kappa * ca.sqrt(u**2 + 8.0 * ca.fmax(KT, 0.0) * u_over_J**2 / math.pi)
+    uR = ship.epsilon * (1.0 - ship.wP) * ca.sqrt(ship.eta * slip**2 + (1.0 - ship.eta) * u**2)
+    b = ca.atan2(-v, u)
+    beta_P = b - ship.xP * r
+    gammaR = ca.if_else(beta_P > 0, ship.gammaR_pos, ship.gammaR_neg)  # flow straightening, port/starboard asymmetric
+    vR = gammaR * (v + ship.lR * r)
+    UR2 = uR**2 + vR**2
+    alphaR = delta - ca.atan2(-vR, uR)
+    FN = ship.AR_over_Ld * ship.f_alpha * UR2 * ca.sin(alphaR)
+    XR = -(1.0 - ship.tR) * FN * ca.sin(delta)
+    YR = -(1.0 + ship.aH) * FN * ca.cos(delta)
+    NR = -(ship.xR + ship.aH * ship.xH) * FN * ca.cos(delta)
+    return XR, YR, NR, {"uR": uR, "vR": vR, "alphaR": alphaR, "J": J, "KT": KT}
+
+
+def mmg_rhs(ship: ShipParams, steering: SteeringParams, x, delta_c, n_rpm, env=None,
+            windage: Windage | None = None):
+    """Right-hand side ẋ of the MMG model with steering gear (CasADi expression, 7x1).
+
+    Equations of motion # eq. (mmg_nd) with the forces of # eq. (tau), kinematics # eq. (kinematics) and the
+    steering gear # eq. (delta_dot_equation). With ``env`` (4-vector ``[V_c, beta_c, U_w, psi_w]``) the wind
+    load of ``windage`` (default :class:`~mmg_casadi.vessel.environment.Windage`) is added to the forces and the
+    current to the kinematics; ``u, v`` are then velocities through the water.
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    steering : SteeringParams
+        Steering-gear parameters.
+    x : casadi.SX or casadi.MX
+        State vector (7) in :data:`STATE_NAMES` order (velocities in U_des, positions in L, angles rad).
+    delta_c : float or casadi.SX or casadi.MX
+        Commanded rudder angle (rad).
+    n_rpm : float or casadi.SX or casadi.MX
+        Propeller speed (rev/min).
+    env : casadi.SX or casadi.MX or sequence, optional
+        Disturbance ``[V_c, beta_c, U_w, psi_w]`` (speeds in U_des, directions rad); ``None`` for calm water.
+    windage : Windage, optional
+        Wind-load description; the default :class:`~mmg_casadi.vessel.environment.Windage` if ``None``.
+    """
+    u, v, r, psi, delta = x[0], x[1], x[2], x[5], x[6]
+    XH, YH, NH = hull_forces(ship, u, v, r)
+    _, _, XP = propeller_terms(ship, u, n_rpm)
+    XR, YR, NR, _ = rudder_forces(ship, u, v, r, delta, n_rpm)
+    m, xg = ship.m, ship.xG_nd
+    X = XH + XP + XR + m * v * r + m * xg * r**2  # eq. (tau) + Coriolis terms of eq. (mmg_nd)
+    Y = YH + YR - m * u * r
+    N = NH + NR - m * xg * u * r
+    if env is not None:
+        u_g, v_g = ground_velocity(u, v, psi, env[0], env[1])
+        XW, YW, NW = wind_forces(ship, windage or Windage(), u_g, v_g, psi, env[2], env[3])
+        X, Y, N = X + XW, Y + YW, N + NW
+    Minv = np.linalg.inv(mass_matrix(ship))
+    acc = ca.mtimes(ca.DM(Minv), ca.vertcat(X, Y, N))
+    xdot = u * ca.cos(psi) - v * ca.sin(psi)  # eq. (kinematics)
+    ydot = u * ca.sin(psi) + v * ca.cos(psi)
+    if env is not None:
+        xdot_c, ydot_c = current_kinematics(env[0], env[1])
+        xdot, ydot = xdot + xdot_c, ydot + ydot_c
+    ddot = steering_rate(delta, delta_c, steering.T_delta, steering.rate_max_nd(ship), steering.delta_max)
+    return ca.vertcat(acc, xdot, ydot, r, ddot)
+
+
+def build_mmg(ship: ShipParams | None = None, steering: SteeringParams | None = None, *, disturbed: bool = False,
+              windage: Windage | None = None) -> ca.Function:
+    """Named CasADi Function ``mmg(x[7], delta_c, n_rpm) -> xdot[7]``, or with ``disturbed=True``
+    ``mmg_env(x[7], delta_c, n_rpm, env[4]) -> xdot[7]`` with the disturbance ``env = [V_c, beta_c, U_w, psi_w]``
+    as an input (see :mod:`mmg_casadi.vessel.environment`; ``windage`` defaults to the KCS estimate there).
+
+    Parameters
+    ----------
+    ship : ShipParams, optional
+        Ship parameters (default: the KCS).
+    steering : SteeringParams, optional
+        Steering gear (default: the KCS's).
+    disturbed : bool, optional
+        Add the disturbance input ``env``.
+    windage : Windage, optional
+        Wind-load description used when ``disturbed``.
+
+    Examples
+    --------
+    >>> f = build_mmg()
+    >>> xdot = f([1.0, 0, 0, 0, 0, 0, 0], 0.0, 115.5)
+    >>> abs(float(xdot[0])) < 1e-3      # self-propulsion point: u' = 1 at 115.5 rpm
+    True
+    >>> fd = build_mmg(disturbed=True)
+    >>> xdot = fd([1.0, 0, 0, 0, 0, 0, 0], 0.0, 115.5, [0.1, math.pi / 2, 0.0, 0.0])  # current to starboard
+    >>> round(float(xdot[4]), 12)       # y_dot = the current
+    0.1
+    """
+    ship = ship or load_kcs()
+    steering = steering or load_steering()
+    x = ca.SX.sym("x", NX)
+    dc = ca.SX.sym("delta_c")
+    n = ca.SX.sym("n_rpm")
+    if not disturbed:
+        return ca.Function("mmg", [x, dc, n], [mmg_rhs(ship, steering, x, dc, n)],
+                           ["x", "delta_c", "n_rpm"], ["xdot"])
+    env = ca.SX.sym("env", NENV)
+    return ca.Function("mmg_env", [x, dc, n, env], [mmg_rhs(ship, steering, x, dc, n, env, windage)],
+                       ["x", "delta_c", "n_rpm", "env"], ["xdot"])
+
+
+def rk4(f, x, args, h):
+    """One classical Runge–Kutta step of ``ẋ = f(x, *args)`` with step ``h`` (inputs held over the step).
+
+    Parameters
+    ----------
+    f : casadi.Function or callable
+        Right-hand side ``f(x, *args)``.
+    x : casadi.SX or casadi.MX or casadi.DM
+        State at the start of the step.
+    args : tuple
+        Further inputs of ``f``, held constant over the step.
+    h : float or casadi.SX or casadi.MX
+        Step size (L/U).
+    """
+    k1 = f(x, *args)
+    k2 = f(x + 0.5 * h * k1, *args)
+    k3 = f(x + 0.5 * h * k2, *args)
+    k4 = f(x + h * k3, *args)
+    return x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+
+def build_rk4_step(f: ca.Function | None = None, n_sub: int = 1) -> ca.Function:
+    """Fixed-step RK4 Function ``rk4_step(x, delta_c, n_rpm, dt) -> x_next`` with ``n_sub`` sub-steps.
+
+    For a disturbed model (``build_mmg(disturbed=True)``) the Function is
+    ``rk4_step_env(x, delta_c, n_rpm, dt, env) -> x_next``, the disturbance held over the step.
+
+    Parameters
+    ----------
+    f : casadi.Function, optional
+        Model from :func:`build_mmg` (default: the calm-water KCS model).
+    n_sub : int, optional
+        Number of RK4 sub-steps per step ``dt``.
+
+    Examples
+    --------
+    >>> step = build_rk4_step()
+    >>> xn = step([1.0, 0, 0, 0, 0, 0, 0], 0.0, 115.5, 0.25)
+    >>> round(float(xn[3]), 3)      # 0.25 L travelled at u' = 1
+    0.25
+    >>> step_env = build_rk4_step(build_mmg(disturbed=True))
+    >>> xn = step_env([1.0, 0, 0, 0, 0, 0, 0], 0.0, 115.5, 0.25, [0.1, 0.0, 0.0, 0.0])
+    >>> round(float(xn[3]), 3)      # plus 0.1 x 0.25 L of following current
+    0.275
+    """
+    f = f or build_mmg()
+    x = ca.SX.sym("x", NX)
+    dc, n, dt = ca.SX.sym("delta_c"), ca.SX.sym("n_rpm"), ca.SX.sym("dt")
+    disturbed = f.n_in() == 4
+    env = ca.SX.sym("env", NENV)
+    args = (dc, n, env) if disturbed else (dc, n)
+    h = dt / n_sub
+    xn = x
+    for _ in range(n_sub):
+        xn = rk4(f, xn, args, h)
+    if disturbed:
+        return ca.Function("rk4_step_env", [x, dc, n, dt, env], [xn], ["x", "delta_c", "n_rpm", "dt", "env"],
+                           ["x_next"])
+    return ca.Function("rk4_step", [x, dc, n, dt], [xn], ["x", "delta_c", "n_rpm", "dt"], ["x_next"])
+
+
+def build_cvodes(f: ca.Function | None = None, t_grid=None, *, reltol=1e-10, abstol=1e-10) -> ca.Function:
+    """Adaptive CVODES integrator of the same model with constant inputs, outputs at ``t_grid``.
+
+    Parameters ``p = [delta_c, n_rpm]``, or ``[delta_c, n_rpm, V_c, beta_c, U_w, psi_w]`` for a disturbed model.
+
+    Parameters
+    ----------
+    f : casadi.Function, optional
+        Model from :func:`build_mmg` (default: the calm-water KCS model).
+    t_grid : sequence of float
+        Output times (L/U).
+    reltol : float, optional
+        Relative tolerance of CVODES.
+    abstol : float, optional
+        Absolute tolerance of CVODES.
+    """
+    f = f or build_mmg()
+    x = ca.SX.sym("x", NX)
+    disturbed = f.n_in() == 4
+    p = ca.SX.sym("p", 2 + NENV if disturbed else 2)
+    ode = f(x, p[0], p[1], p[2:]) if disturbed else f(x, p[0], p[1])
+    dae = {"x": x, "p": p, "ode": ode}
+    return ca.integrator("cvodes_mmg", "cvodes", dae, 0.0, list(t_grid),
+                         {"reltol": reltol, "abstol": abstol, "max_num_steps": 100000})
+
+
+@lru_cache(maxsize=8)
+def _rpm_rootfinder(ship: ShipParams) -> ca.Function:
+    n = ca.SX.sym("n_rpm")
+    u = ca.SX.sym("u")
+    XH, _, _ = hull_forces(ship, u, 0.0, 0.0)
+    _, _, XP = propeller_terms(ship, u, n)
+    g = ca.Function("surge_balance", [n, u], [XH + XP])
+    return ca.rootfinder("rpm_for_speed", "newton", g, {"abstol": 1e-14})
+
+
+def propeller_rpm_for_speed(speed: float, ship: ShipParams | None = None) -> float:
+    """Propeller speed (rev/min) at which the ship's steady straight-line speed is ``speed`` × U_des.
+
+    Solves the surge balance X_H(u', 0, 0) + X_P(u', n) = 0 for n with a CasADi Newton rootfinder.
+
+    Parameters
+    ----------
+    speed : float
+        Steady speed as a fraction of the design speed U_des (> 0).
+    ship : ShipParams, optional
+        Ship parameters (default: the KCS).
+
+    Examples
+    --------
+    >>> round(propeller_rpm_for_speed(1.0), 1)
+    115.5
+    >>> round(propeller_rpm_for_speed(0.5) / propeller_rpm_for_speed(1.0), 4)
+    0.5
+    """
+    ship = ship or load_kcs()
+    if not speed > 0:
+        from mmg_casadi.errors import ParameterError
+        raise ParameterError("speed", "a positive fraction of the design speed", speed)
+    return float(_rpm_rootfinder(ship)(ship.n_design_rpm * speed, speed))
+
+
+def linearise(state, inputs, ship: ShipParams | None = None, steering: SteeringParams | None = None, *,
+              env=None, windage: Windage | None = None):
+    """Exact Jacobians ``(A, B)`` of the model ``ẋ = f(x, u)`` at ``state`` (7) and ``inputs = [delta_c, n_rpm]``.
+
+    The flow-straightening coefficient switches at β_P = 0; exactly on the switch (straight running) the
+    starboard-side value γ_R⁻ is the one differentiated. With ``env = [V_c, beta_c, U_w, psi_w]`` (a sequence or
+    an :class:`~mmg_casadi.vessel.environment.Environment`) the disturbed model is linearised, ``u, v`` being
+    velocities through the water.
+
+    Parameters
+    ----------
+    state : sequence of 7 floats
+        ``[u, v, r, x, y, psi, delta]`` (prime-II).
+    inputs : sequence of 2 floats
+        ``[delta_c, n_rpm]`` (rad, rev/min).
+    ship, steering : ShipParams, SteeringParams, optional
+        Ship and steering gear (default: the KCS).
+    env : sequence of 4 floats or Environment, optional
+        Current and wind ``[V_c, beta_c, U_w, psi_w]``; calm water if omitted.
+    windage : Windage, optional
+        Projected areas for the wind load (default: the KCS estimate).
+
+    Examples
+    --------
+    >>> A, B = linearise([1.0, 0, 0, 0, 0, 0, 0], [0.0, 115.5])
+    >>> A.shape, B.shape
+    ((7, 7), (7, 2))
+    >>> A, _ = linearise([1.0, 0, 0, 0, 0, 0, 0], [0.0, 115.5], env=[0.1, 0.0, 0.0, 0.0])
+    >>> round(float(A[4, 5]), 12)       # d(y_dot)/d(psi) = u through the water, the current adds none
+    1.0
+    """
+    x = ca.SX.sym("x", NX)
+    u = ca.SX.sym("u", 2)
+    if env is None:
+        xdot = build_mmg(ship, steering)(x, u[0], u[1])
+        e = np.zeros(0)
+    else:
+        e = np.asarray(env.vector() if hasattr(env, "vector") else env, float).ravel()
+        if e.size != NENV:
+            from mmg_casadi.errors import ParameterError
+            raise ParameterError("env", f"{NENV} numbers [V_c, beta_c, U_w, psi_w]", e.size)
+        xdot = build_mmg(ship, steering, disturbed=True, windage=windage)(x, u[0], u[1], ca.DM(e))
+    jac = ca.Function("mmg_jacobians", [x, u], [ca.jacobian(xdot, x), ca.jacobian(xdot, u)])
+    A, B = jac(np.asarray(state, float), np.asarray(inputs, float))
+    return np.array(A), np.array(B)

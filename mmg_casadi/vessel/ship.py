@@ -1,0 +1,335 @@
+"""KCS particulars and MMG coefficients, read from the packaged data file ``data/kcs_mmg.toml``.
+
+All coefficients are non-dimensional in the prime-II system built on the DESIGN speed (lengths in L, time in
+L/U_des, forces over ½ρU_des²Ld, moments over ½ρU_des²L²d); the data file records the source of every number.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, fields
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+from mmg_casadi.errors import ParameterError
+
+
+@dataclass(frozen=True)
+class ShipParams:
+    """Ship particulars and MMG coefficients of the laboratory's KCS model (see ``kcs_mmg.toml``).
+
+    Dimensional particulars: ``L``, ``B``, ``d``, ``DP`` in m; ``U_design`` in m/s; ``rho`` in kg/m³;
+    ``n_design_rpm`` in rev/min; ``xG`` in m. Everything else is non-dimensional (prime-II, design speed).
+
+    Parameters
+    ----------
+    L : float
+        Length between perpendiculars (m).
+    B : float
+        Breadth (m).
+    d : float
+        Draft (m).
+    Cb : float
+        Block coefficient.
+    displacement : float
+        Displacement volume ∇ (m³).
+    xG : float
+        Longitudinal centre of gravity from midship (m).
+    kzz : float
+        Yaw radius of gyration over L.
+    rho : float
+        Water density (kg/m³).
+    g : float
+        Gravitational acceleration (m/s²).
+    Fn_design : float
+        Design Froude number.
+    U_design : float
+        Design speed (m/s).
+    m : float
+        Non-dimensional mass m'.
+    mx : float
+        Surge added mass m_x'.
+    my : float
+        Sway added mass m_y'.
+    Jzz : float
+        Yaw added moment of inertia J_zz'.
+    Izz : float
+        Yaw moment of inertia I_zz'.
+    X0 : float
+        Surge resistance coefficient X_0' (of u'²).
+    Xbb : float
+        Hull surge derivative X_ββ'.
+    Xbr_minus_my : float
+        Hull surge derivative X_βr' − m_y'.
+    Xrr : float
+        Hull surge derivative X_rr'.
+    Xbbbb : float
+        Hull surge derivative X_ββββ'.
+    Yb : float
+        Hull sway derivative Y_β'.
+    Yr_minus_mx : float
+        Hull sway derivative Y_r' − m_x'.
+    Ybbb : float
+        Hull sway derivative Y_βββ'.
+    Ybbr : float
+        Hull sway derivative Y_ββr'.
+    Ybrr : float
+        Hull sway derivative Y_βrr'.
+    Yrrr : float
+        Hull sway derivative Y_rrr'.
+    Nb : float
+        Hull yaw-moment derivative N_β'.
+    Nr : float
+        Hull yaw-moment derivative N_r'.
+    Nbbb : float
+        Hull yaw-moment derivative N_βββ'.
+    Nbbr : float
+        Hull yaw-moment derivative N_ββr'.
+    Nbrr : float
+        Hull yaw-moment derivative N_βrr'.
+    Nrrr : float
+        Hull yaw-moment derivative N_rrr'.
+    DP : float
+        Propeller diameter (m).
+    wP : float
+        Effective wake fraction at the propeller w_P.
+    tP : float
+        Thrust deduction factor t_P.
+    k0 : float
+        Thrust-coefficient polynomial K_T(J) constant term.
+    k1 : float
+        Thrust-coefficient polynomial K_T(J) linear term.
+    k2 : float
+        Thrust-coefficient polynomial K_T(J) quadratic term.
+    n_design_rpm : float
+        Propeller speed at the design self-propulsion point (rev/min).
+    xP : float
+        Longitudinal propeller position x_P' (over L).
+    AR_over_Ld : float
+        Rudder area over L·d.
+    aspect_ratio : float
+        Rudder aspect ratio Λ.
+    f_alpha : float
+        Rudder lift-gradient coefficient f_α.
+    eta : float
+        Propeller diameter over rudder span, η = D_P/H_R.
+    epsilon : float
+        Wake ratio ε between rudder and propeller.
+    kappa : float
+        Propeller-slipstream factor κ.
+    xR : float
+        Longitudinal rudder position x_R' (over L).
+    lR : float
+        Effective longitudinal rudder inflow coordinate l_R' (over L).
+    gammaR_pos : float
+        Flow-straightening coefficient γ_R for β_P > 0.
+    gammaR_neg : float
+        Flow-straightening coefficient γ_R for β_P ≤ 0.
+    tR : float
+        Rudder steering-resistance deduction factor t_R.
+    aH : float
+        Rudder-hull interaction factor a_H.
+    xH : float
+        Longitudinal position of the hull-induced rudder force x_H' (over L).
+    """
+
+    L: float
+    B: float
+    d: float
+    Cb: float
+    displacement: float
+    xG: float
+    kzz: float
+    rho: float
+    g: float
+    Fn_design: float
+    U_design: float
+    m: float
+    mx: float
+    my: float
+    Jzz: float
+    Izz: float
+    X0: float
+    Xbb: float
+    Xbr_minus_my: float
+    Xrr: float
+    Xbbbb: float
+    Yb: float
+    Yr_minus_mx: float
+    Ybbb: float
+    Ybbr: float
+    Ybrr: float
+    Yrrr: float
+    Nb: float
+    Nr: float
+    Nbbb: float
+    Nbbr: float
+    Nbrr: float
+    Nrrr: float
+    DP: float
+    wP: float
+    tP: float
+    k0: float
+    k1: float
+    k2: float
+    n_design_rpm: float
+    xP: float
+    AR_over_Ld: float
+    aspect_ratio: float
+    f_alpha: float
+    eta: float
+    epsilon: float
+    kappa: float
+    xR: float
+    lR: float
+    gammaR_pos: float
+    gammaR_neg: float
+    tR: float
+    aH: float
+    xH: float
+
+    @property
+    def xG_nd(self) -> float:
+        """Longitudinal centre of gravity x_G' = x_G/L."""
+        return self.xG / self.L
+
+    @property
+    def time_scale_s(self) -> float:
+        """Seconds per unit of non-dimensional time, L/U_des."""
+        return self.L / self.U_design
+
+
+@dataclass(frozen=True)
+class SteeringParams:
+    """Steering gear: saturation ``delta_max_deg`` (deg), time constant ``T_delta`` (non-dimensional, L/U_des),
+    rate limit ``rate_max_deg_per_s`` (deg/s, full scale).
+
+    Parameters
+    ----------
+    delta_max_deg : float, optional
+        Rudder saturation (deg, in (0, 45]).
+    T_delta : float, optional
+        Time constant of the steering lag (L/U_des, > 0).
+    rate_max_deg_per_s : float, optional
+        Rudder rate limit (deg/s full scale, > 0).
+    """
+
+    delta_max_deg: float = 35.0
+    T_delta: float = 1.0
+    rate_max_deg_per_s: float = 5.0
+
+    def __post_init__(self):
+        if not 0.0 < self.delta_max_deg <= 45.0:
+            raise ParameterError("delta_max_deg", "a number in (0, 45] degrees", self.delta_max_deg)
+        if not self.T_delta > 0.0:
+            raise ParameterError("T_delta", "a number > 0 (non-dimensional time)", self.T_delta)
+        if not self.rate_max_deg_per_s > 0.0:
+            raise ParameterError("rate_max_deg_per_s", "a number > 0 deg/s", self.rate_max_deg_per_s)
+
+    @property
+    def delta_max(self) -> float:
+        """Rudder saturation in rad."""
+        return math.radians(self.delta_max_deg)
+
+    def rate_max_nd(self, ship: ShipParams) -> float:
+        """Rate limit in rad per unit non-dimensional time: 5°/s × L/U_des.
+
+        Parameters
+        ----------
+        ship : ShipParams
+            Ship whose L/U_des sets the time scale.
+        """
+        return math.radians(self.rate_max_deg_per_s) * ship.time_scale_s
+
+
+DATA_FILE = "kcs_mmg.toml"
+
+
+@lru_cache(maxsize=1)
+def _packaged_text() -> str:
+    """The packaged data file, read once per process (a study builds thousands of scenarios)."""
+    return resources.files("mmg_casadi").joinpath("data", DATA_FILE).read_text()
+
+
+def _read_toml(path: str | Path | None) -> dict:
+    return tomllib.loads(_packaged_text() if path is None else Path(path).read_text())
+
+
+@lru_cache(maxsize=1)
+def _packaged_kcs() -> ShipParams:
+    return _ship_from(_read_toml(None))
+
+
+def _ship_from(raw: dict) -> ShipParams:
+    flat: dict = {}
+    for block in ("ship", "mass", "hull", "propeller", "rudder"):
+        flat.update(raw[block])
+    names = {f.name for f in fields(ShipParams)}
+    return ShipParams(**{k: float(v) for k, v in flat.items() if k in names})
+
+
+def load_kcs(path: str | Path | None = None) -> ShipParams:
+    """Load the KCS coefficients from the packaged data file (or ``path``).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path, optional
+        TOML data file to read instead of the packaged one.
+
+    Examples
+    --------
+    >>> kcs = load_kcs()
+    >>> round(kcs.m, 6), round(kcs.Izz, 6)
+    (0.18228, 0.011432)
+    """
+    return _packaged_kcs() if path is None else _ship_from(_read_toml(path))  # frozen: sharing is safe
+
+
+def load_steering(path: str | Path | None = None) -> SteeringParams:
+    """Steering-gear parameters from the data file's ``[steering]`` block.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path, optional
+        TOML data file to read instead of the packaged one.
+    """
+    s = _read_toml(path)["steering"]
+    return SteeringParams(float(s["delta_max_deg"]), float(s["T_delta"]), float(s["rate_max_deg_per_s"]))
+
+
+def load_reference(name: str = "turning_15deg_starboard", path: str | Path | None = None) -> dict:
+    """Published validation reference stored in the data file's ``[reference.*]`` tables.
+
+    Parameters
+    ----------
+    name : str, optional
+        Name of the ``[reference.NAME]`` table.
+    path : str or pathlib.Path, optional
+        TOML data file to read instead of the packaged one.
+    """
+    return dict(_read_toml(path)["reference"][name])
+
+
+def derived_masses(ship: ShipParams) -> dict:
+    """Mass and added masses recomputed from the particulars and the dimensional added masses of the data source.
+
+    ``m' = ∇/(½L²d)``, ``I_zz' = m'(k_zz² + x_G'²)``; the added masses m_x = 1790.85 t, m_y = 44324.18 t and
+    J_zz = 140067300 t·m² (MDLHydroD, Source A) over ½L²d and ½L⁴d.
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship whose particulars are used.
+    """
+    q = 0.5 * ship.L**2 * ship.d
+    m = ship.displacement / q
+    xg = ship.xG / ship.L
+    return {
+        "m": m,
+        "mx": 1790.85 / q,
+        "my": 44324.18 / q,
+        "Jzz": 140067300.0 / (0.5 * ship.L**4 * ship.d),
+        "Izz": m * (ship.kzz**2 + xg**2),
+    }
