@@ -27,15 +27,16 @@ PAPER_RUNS_PER_CELL = 5000
 
 WORKLOAD = r"""
 import inspect, json, sys, time
-import mmg_casadi.montecarlo.study as mc
+from mmg_casadi.montecarlo.batching import DEFAULT_BATCH, prepare_layouts
+from mmg_casadi.montecarlo.execution import layout_for, run_batch
 env, method, n, seed = int(sys.argv[1]), sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 params = json.loads(sys.argv[5])
-kw = {"params": params} if "params" in inspect.signature(mc.run_batch).parameters else {}
-mc.prepare_layouts([mc.layout_for(env, method, **kw)], 1)
+kw = {"params": params} if "params" in inspect.signature(run_batch).parameters else {}
+prepare_layouts([layout_for(env, method, **kw)], 1)
 t0 = time.perf_counter()
 rows = []
-for s in range(0, n, mc.DEFAULT_BATCH):
-    rows += mc.run_batch(env, method, range(s, min(n, s + mc.DEFAULT_BATCH)), seed, **kw)
+for s in range(0, n, DEFAULT_BATCH):
+    rows += run_batch(env, method, range(s, min(n, s + DEFAULT_BATCH)), seed, **kw)
 wall = time.perf_counter() - t0
 print(json.dumps({"wall": wall, "outcomes": [[r["run"], bool(r["success"]), r["failure"]] for r in rows]}))
 """

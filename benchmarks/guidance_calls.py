@@ -24,10 +24,11 @@ import time
 
 import numpy as np
 
-from mmg_casadi.closed_loop.step import Layout, default_globals, initial_state, pack_params
+from mmg_casadi.closed_loop.layout import default_globals, Layout, pack_params
+from mmg_casadi.closed_loop.state import initial_state
 from mmg_casadi.guidance.methods import AVOIDING
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
-from mmg_casadi.montecarlo.study import time_guidance
+from mmg_casadi.montecarlo.execution import time_guidance
 from mmg_casadi.closed_loop.simulation import compiled_guidance
 
 METHODS = AVOIDING

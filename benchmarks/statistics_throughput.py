@@ -1,6 +1,6 @@
 """Throughput of the statistical study on this machine: runs/s of one batch per environment and method.
 
-For every environment and method, :func:`mmg_casadi.montecarlo.study.run_batch` simulates ``--runs`` random
+For every environment and method, :func:`mmg_casadi.montecarlo.execution.run_batch` simulates ``--runs`` random
 encounters (32 by default) as one batch on one core, after a warm-up (compiling the closed loop once, loading
 it, building the batched ``map``/``mapaccum`` Function). Prints runs/s per cell, the ratio to a baseline cell
 measured in the same process (environment 1, modified-vortex), and the projected wall time of the full study
@@ -21,7 +21,9 @@ import os
 import sys
 import time
 
-from mmg_casadi.montecarlo.study import DEFAULT_CHUNK, DEFAULT_METHODS, layout_for, prepare_layouts, run_batch
+from mmg_casadi.montecarlo.batching import prepare_layouts
+from mmg_casadi.montecarlo.execution import DEFAULT_CHUNK, layout_for, run_batch
+from mmg_casadi.montecarlo.study import DEFAULT_METHODS
 from mmg_casadi.montecarlo.sampling import parse_envs
 
 PAPER_RUNS_PER_CELL = 5000

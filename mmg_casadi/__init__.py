@@ -13,7 +13,8 @@ Examples
 (3.5, True)
 """
 
-from mmg_casadi.closed_loop.step import ClosedLoopModel, Layout, Problem, build_problem
+from mmg_casadi.closed_loop.layout import Layout
+from mmg_casadi.closed_loop.problem import build_problem, ClosedLoopModel, Problem
 from mmg_casadi.vessel.maneuvers import turning_circle, zigzag
 from mmg_casadi.guidance.methods import METHODS
 from mmg_casadi.vessel.mmg import linearise

@@ -274,7 +274,7 @@ def _tune(a) -> dict:
 
 
 def _convert(a) -> dict:
-    from mmg_casadi.scenarios.maritime_schema import convert_file
+    from mmg_casadi.scenarios.interchange import convert_file
     return convert_file(a.file, a.out, method=a.method, target_method=a.target_method,
                         length_scale=a.length_scale, reference=a.reference)
 

@@ -28,8 +28,9 @@ import math
 from dataclasses import dataclass
 
 from mmg_casadi.errors import InputError, ParameterError, check_range
+from mmg_casadi.vessel.library import VESSELS
 
-GROUPS = ("simulation", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "colregs-vortex",
+GROUPS = ("simulation", "vessel", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "colregs-vortex",
           "walls", "velocity-obstacle", "outcome", "environment")
 """Parameter groups, in the order of the README table; a method's guidance uses its own group(s)."""
 
@@ -61,7 +62,7 @@ class Param:
     choices : tuple of str
         Allowed values of a ``"choice"``.
     structural : bool
-        Changes the shape of the compiled closed loop (a :class:`~mmg_casadi.closed_loop.step.Layout` field) rather
+        Changes the shape of the compiled closed loop (a :class:`~mmg_casadi.closed_loop.layout.Layout` field) rather
         than a numeric input of it.
     """
 
@@ -159,6 +160,13 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "paper Table 2 (R_tol = 3 L)", "simulation", low_open=True),
     _P("ship_radius", 0.5, 0.0, None, "L", "radius of another ship as an inverse-square obstacle",
        "our choice: half a ship length, like the paper's static obstacles", "simulation", low_open=True),
+    # vessel and engine
+    _P("vessel", "kcs", None, None, "", "hull of every ship that names none (scenario files: per-ship "
+       "'vessel')", "paper §2: the KRISO Container Ship (mmg_casadi.vessel.library)", "vessel", kind="choice",
+       choices=VESSELS, structural=True),
+    _P("engine_rate_rpm_s", 1.0, 0.0, None, "rpm/s", "largest rate at which the engine changes propeller speed "
+       "towards a method's command (methods that command no speed keep the service rpm exactly)",
+       "our choice: the KCS's service 115.5 rpm to stop in about 2 min", "vessel"),
     # ILOS
     _P("ilos_delta", 2.0, 0.0, None, "L", "ILOS look-ahead distance Δ (K_p^g = 1/Δ)", "paper Table 2", "ilos",
        low_open=True),

@@ -15,7 +15,7 @@ Cases:
   integral to have settled there: its time constant is about Δ/(k U) = 40 L/U_des); the fraction the integral
   removes is ``1 - offset(k=0.05)/offset(k=0)``, also reported at t = 100 and t = 200.
 * **waypoint square** (``square.png``): the paper's square with the paper's PD gains (3.5, 4) and with those of
-  ``tune pd`` (:func:`tuning.pd.design_pd` at the design speed with the default specification), calm, in the
+  ``tune pd`` (:func:`tuning.pd.design.design_pd` at the design speed with the default specification), calm, in the
   current and in the wind: CE and MCTE.
 * **encounters** (``encounters/``): the head-on and crossing encounters (COLREG rules 14, 15) in the current and
   in the wind with ``methods`` (default: the modified vortex), as the COLREG study writes them.
@@ -38,6 +38,7 @@ from mmg_casadi.errors import InputError
 from mmg_casadi.params import check_value, resolve
 from mmg_casadi.plotting import COLORS, draw_path, marine_axes
 from mmg_casadi.scenarios.scenario import scenario_from_dict, with_params
+from tuning.pd.design import PdSpec, design_pd
 from mmg_casadi.scenarios.run import run_scenario, write_outputs
 
 from ._common import run_cases
@@ -135,7 +136,6 @@ def _at(result, time: float) -> float:
 
 def tuned_gains() -> tuple[float, float]:
     """PD gains of ``tune pd`` at the design speed with the default specification (pole placement, ζ = 0.8)."""
-    from tuning.pd import PdSpec, design_pd
     d = design_pd(1.0, PdSpec())
     return float(d.kp), float(d.kd)
 

@@ -1,4 +1,4 @@
-"""COLREG bookkeeping (mmg_casadi.colregs.classify) on hand-built trajectories."""
+"""COLREG bookkeeping (mmg_casadi.colregs.classify, .assess, .geometry) on hand-built trajectories."""
 
 from __future__ import annotations
 
@@ -7,15 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from mmg_casadi.colregs.classify import (
-    ENCOUNTERS,
-    ColregProfile,
-    PairAssessment,
-    assess_obstacle,
-    assess_pair,
-    classify_encounter,
-    wrap_to_pi,
-)
+from mmg_casadi.colregs.assess import PairAssessment, assess_obstacle, assess_pair
+from mmg_casadi.colregs.classify import ENCOUNTERS, ColregProfile, classify_encounter
+from mmg_casadi.colregs.geometry import wrap_to_pi
 from mmg_casadi.errors import ParameterError
 
 T = np.arange(0.0, 80.0 + 1e-9, 0.1)

@@ -14,7 +14,8 @@ import math
 import numpy as np
 import pytest
 
-from mmg_casadi.colregs.classify import ColregProfile, assess_pair, classify_encounter, get_profile
+from mmg_casadi.colregs.assess import assess_pair
+from mmg_casadi.colregs.classify import ColregProfile, classify_encounter, get_profile
 from mmg_casadi.colregs.score import RULES, cpa_tcpa, score_pair, stand_on_should_act
 from mmg_casadi.errors import InputError, ParameterError
 

@@ -7,7 +7,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop.step import default_globals
+from mmg_casadi.closed_loop.layout import default_globals
 from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams, colregs_vortex, colregs_vortex_terms
 from mmg_casadi.errors import ParameterError
 from mmg_casadi.guidance.fields import heading_of, modified_vortex

@@ -99,7 +99,7 @@ def test_symbolic_function_matches_numeric_call_with_the_filter_acting():
     ("r_cq", "cv_r_cq", -1.0, -1.0), ("d_cq", "cv_d_cq", 0.0, 0.0), ("dpsi_cq", "cv_dpsi_cq_deg", 0.0, 0.0),
     ("dpsi_cq", "cv_dpsi_cq_deg", 4.0, math.degrees(4.0))])
 def test_filter_parameters_are_range_checked(field, name, value, table_value):
-    from mmg_casadi.closed_loop.step import default_globals
+    from mmg_casadi.closed_loop.layout import default_globals
     from mmg_casadi.errors import ParameterError
     with pytest.raises(ParameterError, match=name):
         ColregsVortexParams(**{field: value})

@@ -79,7 +79,7 @@ def test_debt_list_only_shrinks():
 def test_public_function_finder_sees_the_flat_api():
     found = {name for name, _ in public_functions()}
     assert {"mmg_casadi.scenarios.run.run_scenario", "mmg_casadi.params.markdown_table",
-            "tuning.pd.design_pd", "studies.waypoint_square.run"} <= found
+            "tuning.pd.design.design_pd", "studies.waypoint_square.run"} <= found
     assert not any(".".join(n.split(".")[:-1]).split(".")[-1].startswith("_") for n in found)
 
 

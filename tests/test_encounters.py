@@ -12,7 +12,7 @@ import pytest
 from mmg_casadi.cli import main
 from mmg_casadi.scenarios.scenario import with_method
 from mmg_casadi.scenarios import encounters
-from mmg_casadi.closed_loop.step import build_problem
+from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.scenarios.run import assess, run_scenario
 from studies import narrow_channel
 

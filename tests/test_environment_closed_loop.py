@@ -9,11 +9,14 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop.step import Layout, build_closed_loop_step, build_problem, env_values, is_disturbed
+from mmg_casadi.closed_loop.layout import env_values, is_disturbed, Layout
+from mmg_casadi.closed_loop.problem import build_problem
+from mmg_casadi.closed_loop.step import build_closed_loop_step
 from mmg_casadi.closed_loop.compiled import generate_source
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, parse_range, sample_disturbance
 from mmg_casadi.errors import InputError, ScenarioError
-from mmg_casadi.montecarlo.study import run_batch, run_study
+from mmg_casadi.montecarlo.execution import run_batch
+from mmg_casadi.montecarlo.study import run_study
 from mmg_casadi.params import resolve
 from mmg_casadi.scenarios.scenario import dump_scenario, scenario_from_dict
 from mmg_casadi.scenarios.run import run_scenario

@@ -8,12 +8,13 @@ import pytest
 from scipy.stats import binomtest
 
 from mmg_casadi.cli import main
-from mmg_casadi.closed_loop.step import build_problem
+from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.montecarlo.comparisons import COMPARISON_COLUMNS, compare_methods, read_csv
 from mmg_casadi.colregs.compliance import own_ship_compliance
 from mmg_casadi.scenarios.encounters import colregs_cases
 from mmg_casadi.errors import InputError
-from mmg_casadi.montecarlo.study import run_scenarios, run_study
+from mmg_casadi.montecarlo.execution import run_scenarios
+from mmg_casadi.montecarlo.study import run_study
 from mmg_casadi.montecarlo.results import RUN_COLUMNS, ResultsTable, summarize
 from mmg_casadi.scenarios.scenario import scenario_from_dict, with_method
 from mmg_casadi.scenarios.run import run_scenario

@@ -7,7 +7,7 @@ import pytest
 from mmg_casadi.errors import InputError
 from mmg_casadi.montecarlo.failures import MECHANISMS, failure_mechanism, turn_time_90, unavoidable_at_start
 from mmg_casadi.vessel.maneuvers import turning_circle
-from mmg_casadi.montecarlo.study import run_scenarios
+from mmg_casadi.montecarlo.execution import run_scenarios
 from mmg_casadi.montecarlo.results import MECHANISMS as RESULT_MECHANISMS
 from mmg_casadi.scenarios.scenario import scenario_from_dict
 

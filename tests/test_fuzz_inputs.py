@@ -2,7 +2,7 @@
 
 Whatever the input — random TOML values and types, wrong shapes, NaN/inf, huge numbers, unicode, dates,
 missing and extra keys, text that is not TOML at all — loading either succeeds with a valid scenario (it
-passes the validation-only :func:`~mmg_casadi.closed_loop.step.build_problem` and survives a dump/load round trip)
+passes the validation-only :func:`~mmg_casadi.closed_loop.problem.build_problem` and survives a dump/load round trip)
 or raises the project's :class:`~mmg_casadi.errors.InputError` with a one-line message; and the CLI exits
 with status 2 and writes nothing. No simulation runs here (inputs the CLI would accept are skipped).
 
@@ -34,7 +34,7 @@ from mmg_casadi.scenarios.scenario import (
     load_scenario,
     scenario_from_dict,
 )
-from mmg_casadi.closed_loop.step import build_problem
+from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.params import load_file as load_params_file
 
 FAST = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow,

@@ -13,15 +13,10 @@ import pytest
 
 from mmg_casadi.cli import main
 from mmg_casadi.errors import InputError
-from mmg_casadi.scenarios.maritime_schema import (
-    KNOT,
-    LocalPlane,
-    _ecef,
-    load_traffic_situation,
-    read_header,
-    scenario_to_traffic_situation,
-    traffic_situation_to_scenario,
-)
+from mmg_casadi.scenarios.geodesy import LocalPlane, _ecef
+from mmg_casadi.scenarios.interchange import read_header
+from mmg_casadi.scenarios.maritime_export import scenario_to_traffic_situation
+from mmg_casadi.scenarios.maritime_schema import KNOT, load_traffic_situation, traffic_situation_to_scenario
 from mmg_casadi.scenarios.scenario import Scenario, Settings, ShipSpec, load_scenario
 
 EXAMPLE = files("mmg_casadi") / "data" / "traffic_situation.json"

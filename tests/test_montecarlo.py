@@ -12,21 +12,14 @@ import math
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop.step import NS, S_, ClosedLoopModel, Layout, initial_state
+from mmg_casadi.closed_loop.layout import Layout
+from mmg_casadi.closed_loop.problem import ClosedLoopModel
+from mmg_casadi.closed_loop.state import initial_state
 from mmg_casadi.params import resolve
 from mmg_casadi.errors import InputError
-from mmg_casadi.montecarlo.study import (
-    TIMING_COLUMNS,
-    BatchTask,
-    LocalExecutor,
-    RayExecutor,
-    classify,
-    plan_batches,
-    run_batch,
-    run_scenarios,
-    run_study,
-    sampled_scenario,
-)
+from mmg_casadi.montecarlo.batching import BatchTask, LocalExecutor, RayExecutor, plan_batches
+from mmg_casadi.montecarlo.execution import TIMING_COLUMNS, classify, run_batch, run_scenarios, sampled_scenario
+from mmg_casadi.montecarlo.study import run_study
 from mmg_casadi.montecarlo.results import RUN_COLUMNS, ResultsTable
 from mmg_casadi.montecarlo.sampling import sample_scenario
 from mmg_casadi.scenarios.scenario import scenario_from_dict
@@ -190,7 +183,7 @@ def _final_state(layout, **own):
     x = initial_state(layout, [{"speed": 1.0, "start": (0.0, 0.0), "heading": 0.0, "path": [(0, 0), (80, 0)]}])
     x[0] = 300.0
     for k, v in own.items():
-        x[1 + S_[k]] = v
+        x[layout.row(k, 0)] = v
     return x
 
 
@@ -207,13 +200,13 @@ def test_classify_stalled_diverged_from_final_state():
     r = classify(model, _final_state(layout, status=1.0, t_goal=90.0, ce_int=0.2 * math.radians(35) * 90.0,
                                      mcte_int=45.0))
     assert r["success"] and r["ce"] == pytest.approx(0.2) and r["mcte"] == pytest.approx(0.5)
-    assert NS == len(_final_state(layout)) - 1
+    assert layout.ns == len(_final_state(layout)) - 1
 
 
 def _own_mcte_from_states(res):
     """Own-ship MCTE of a run_scenario trajectory with y_e re-evaluated by the step at every stored state."""
     from mmg_casadi.closed_loop.metrics import tracking_metrics
-    from mmg_casadi.closed_loop.step import build_problem
+    from mmg_casadi.closed_loop.problem import build_problem
     from mmg_casadi.closed_loop.simulation import compiled_step
     pr = build_problem(res.scenario)
     layout, p, g = pr.layout, pr.p, pr.model.values
@@ -295,7 +288,6 @@ def test_one_study_per_output_directory(tmp_path):
 
 def test_scenarios_with_different_horizons_share_a_batch():
     from mmg_casadi.scenarios.scenario import scenario_from_dict
-    from mmg_casadi.montecarlo.study import run_scenarios
 
     def sc(t_max):
         return scenario_from_dict({"settings": {"method": "none", "t_max": t_max},

@@ -14,8 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop.step import GLOBAL_PARAMS, build_problem
-from mmg_casadi.montecarlo.study import run_batch, sampled_scenario
+from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS
+from mmg_casadi.closed_loop.problem import build_problem
+from mmg_casadi.montecarlo.execution import run_batch, sampled_scenario
 from mmg_casadi.closed_loop.simulation import simulate_batch
 
 DATA = Path(__file__).parent / "data" / "runs_79ba6c0.csv"

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from mmg_casadi.montecarlo.study import TIMING_COLUMNS, BatchTask, LocalExecutor, RayExecutor, run_batch
+from mmg_casadi.montecarlo.batching import BatchTask, LocalExecutor, RayExecutor
+from mmg_casadi.montecarlo.execution import TIMING_COLUMNS, run_batch
 from mmg_casadi.montecarlo.results import RUN_COLUMNS, ResultsTable
 from mmg_casadi.signals import Terminated, exit_status, terminate_as_interrupt
 

@@ -14,8 +14,9 @@ import math
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop.step import (NS, S_, Layout, build_closed_loop_step, build_guidance, default_globals,
-                                    initial_state, pack_params)
+from mmg_casadi.closed_loop.layout import default_globals, Layout, pack_params
+from mmg_casadi.closed_loop.state import initial_state
+from mmg_casadi.closed_loop.step import build_closed_loop_step, build_guidance
 from mmg_casadi.errors import ParameterError
 from mmg_casadi.guidance.methods import AVOIDING
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
@@ -37,12 +38,12 @@ def _states(layout: Layout, count: int, seed: int):
                           "heading": rng.uniform(-math.pi, math.pi), "speed": rng.uniform(0.3, 1.0)})
         x = initial_state(layout, ships)
         for i in range(n):
-            row = 1 + i * NS
-            x[row + S_["v"]] = rng.normal(0, 0.05)
-            x[row + S_["r"]] = rng.normal(0, 0.1)
-            x[row + S_["delta"]] = rng.normal(0, 0.2)
-            x[row + S_["vo_heading"]] = rng.uniform(-math.pi, math.pi)
-            x[row + S_["status"]] = rng.choice([0, 0, 0, 1, 2])
+            x[layout.row("v", i)] = rng.normal(0, 0.05)
+            x[layout.row("r", i)] = rng.normal(0, 0.1)
+            x[layout.row("delta", i)] = rng.normal(0, 0.2)
+            for name in layout.memory:
+                x[layout.row(name, i)] = rng.uniform(-math.pi, math.pi)
+            x[layout.row("status", i)] = rng.choice([0, 0, 0, 1, 2])
         x[0] = rng.uniform(0, 50)
         obstacles = [tuple(rng.uniform(-spread, spread, 2)) + (0.5,) for _ in range(layout.n_obstacles)]
         walls = [(-100.0, 20.0 + 5 * w, 100.0, 20.0 + 5 * w) for w in range(layout.n_walls)]
@@ -67,7 +68,7 @@ def test_sparse_step_is_the_dense_step(layout):
     xs, as_ = (np.array(v) for v in sparse(X, P))
     assert np.array_equal(xd, xs)  # bit for bit
     # aux: equal for every sailing ship, NaN for the others
-    sailing = np.array([[X[1 + i * NS + S_["status"], c] == 0 for c in range(X.shape[1])]
+    sailing = np.array([[X[layout.row("status", i), c] == 0 for c in range(X.shape[1])]
                         for i in range(layout.n_ships)]).T.reshape(-1)
     ad, as_ = ad.T.reshape(-1, ad.shape[0]), as_.T.reshape(-1, as_.shape[0])
     assert np.array_equal(ad[sailing], as_[sailing])
@@ -81,7 +82,7 @@ def test_the_random_states_cover_every_branch():
     X, _ = _states(layout, 24, seed=1)
     counts = set()
     for c in range(X.shape[1]):
-        pos = np.array([[X[1 + i * NS + S_["x"], c], X[1 + i * NS + S_["y"], c]] for i in range(layout.n_ships)])
+        pos = np.array([[X[layout.row("x", i), c], X[layout.row("y", i), c]] for i in range(layout.n_ships)])
         d = np.hypot(*(pos[:, None, :] - pos[None, :, :]).transpose(2, 0, 1))
         counts |= set((d < 15.0).sum(axis=1) - 1)
     assert {0, 1, 2, 3, 5} <= counts

@@ -1,4 +1,4 @@
-"""Gradient-based tuning of the modified sink-vortex (tuning/apf.py, `mmg-casadi tune apf`)."""
+"""APF tuning: the superseded IPOPT tuner (tuning/apf_ipopt.py) and `mmg-casadi tune apf`."""
 
 from importlib import resources
 
@@ -7,35 +7,35 @@ import pytest
 
 from mmg_casadi.cli import main
 from mmg_casadi.params import load_file as load_params_file
-from tuning import apf
+from tuning import apf, apf_ipopt
 
 SCENARIOS = resources.files("mmg_casadi").joinpath("data", "scenarios")
-TINY = apf.TuningConfig(max_steps=120, max_iter=6)  # 30 time units: both encounters happen inside
+TINY = apf_ipopt.TuningConfig(max_steps=120, max_iter=6)  # 30 time units: both encounters happen inside
 
 
 @pytest.fixture(scope="module")
 def tiny_cases():
     enc = apf.paper_encounters()
     scs = {"static-obstacle": enc["static-obstacle"], "head-on": enc["head-on"]}
-    return apf.prepare_cases(scs, TINY)
+    return apf_ipopt.prepare_cases(scs, TINY)
 
 
 def test_gradient_matches_central_differences(tiny_cases):
-    prob = apf.SmoothProblem(tiny_cases, TINY)
-    gc = apf.gradient_check(prob, apf.PAPER, rel_step=1e-6)
+    prob = apf_ipopt.SmoothProblem(tiny_cases, TINY)
+    gc = apf_ipopt.gradient_check(prob, apf_ipopt.PAPER, rel_step=1e-6)
     assert gc["rel_error_norm"] < 1e-4, gc
     assert all(abs(a) > 0 for a in gc["ad"])
     # only the direction of the field matters: J is invariant along (k_vor0, lam_sink) -> c (k_vor0, lam_sink)
-    assert abs(gc["scale_invariance"]) < 1e-6 * abs(gc["ad"][0] * apf.PAPER[0])
+    assert abs(gc["scale_invariance"]) < 1e-6 * abs(gc["ad"][0] * apf_ipopt.PAPER[0])
 
 
 def test_optimiser_improves_training_objective(tiny_cases):
-    res = apf.tune(tiny_cases, TINY, report=None, check_gradient=False)
+    res = apf_ipopt.tune(tiny_cases, TINY, report=None, check_gradient=False)
     assert res.objective_after < res.objective_before - 1e-3
     assert len(res.iterations) >= 2
-    for (lo, hi), k in zip(apf.BOUNDS, apf.THETA):
+    for (lo, hi), k in zip(apf_ipopt.BOUNDS, apf_ipopt.THETA):
         assert lo <= res.params_after[k] <= hi
-    assert np.all(np.array(res.constraints_after) >= np.array(res.constraint_bounds) - apf.FEAS_TOL)
+    assert np.all(np.array(res.constraints_after) >= np.array(res.constraint_bounds) - apf_ipopt.FEAS_TOL)
     d = res.to_dict()
     assert d["objective_after"] == res.objective_after and "ratio_after" in d
 
@@ -43,7 +43,7 @@ def test_optimiser_improves_training_objective(tiny_cases):
 def test_params_toml_round_trip_and_simulate_accepts_it(tmp_path):
     params = {"k_vor0": -12.5, "lam_sink": -140.25, "r_safe": 13.0}
     f = tmp_path / "params.toml"
-    apf.write_params_toml(params, f)
+    apf_ipopt.write_params_toml(params, f)
     assert load_params_file(f) == params
     out = tmp_path / "sim"
     assert main(["simulate", str(SCENARIOS / "head_on.toml"), "--params", str(f), "--out", str(out)]) == 0

@@ -1,4 +1,4 @@
-"""PD heading-controller design (tuning.linear, tuning.pd, tuning.cli_pd)."""
+"""PD heading-controller design (tuning.linear, tuning.pd.*, tuning.cli_pd)."""
 
 from __future__ import annotations
 
@@ -12,8 +12,9 @@ from mmg_casadi.cli import main
 from mmg_casadi.errors import ParameterError
 from mmg_casadi.vessel.mmg import STATE_NAMES, linearise, propeller_rpm_for_speed
 from tuning.linear import fit_nomoto_step, nomoto_first_order, nomoto_second_order, yaw_subsystem
-from tuning.pd import (PdSpec, analyse_gains, design_pd, grid_step_metrics, paper_gains_map, place_pair,
-                       verify_nonlinear)
+from tuning.pd.design import PdSpec, analyse_gains, design_pd, place_pair
+from tuning.pd.gain_map import grid_step_metrics, paper_gains_map
+from tuning.pd.verification import verify_nonlinear
 
 METRIC_KEYS = {"kp", "kd", "nomoto_K", "nomoto_T", "overshoot_linear", "overshoot_nonlinear", "zeta", "wn",
                "margins", "settling_time_linear", "settling_time_nonlinear", "paper_gains", "waypoint_square"}

@@ -1,4 +1,4 @@
-"""The velocity obstacle's "keep the chosen velocity" behaviour (vo_hold) and its memory state vo_heading."""
+"""The velocity obstacle's "keep the chosen velocity" behaviour (vo_hold) and its memory row held_heading."""
 
 import math
 
@@ -6,7 +6,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from mmg_casadi.closed_loop.step import NS, SHIP_STATE, S_, Layout, initial_state
+from mmg_casadi.closed_loop.layout import Layout, SHIP_STATE
+from mmg_casadi.closed_loop.state import initial_state
+from mmg_casadi.closed_loop.outcome import S_
 from mmg_casadi.scenarios.encounters import colregs_cases
 from mmg_casadi.params import PARAMETERS, resolve
 from mmg_casadi.scenarios.scenario import with_method
@@ -24,12 +26,14 @@ def test_defaults_are_the_papers_reading():
     assert Layout(("velocity-obstacle",)).key() != Layout(("velocity-obstacle",), vo_hold=False).key()
 
 
-def test_memory_is_the_last_state_row_initialised_to_the_heading():
-    assert SHIP_STATE[-1] == "vo_heading" and NS == len(SHIP_STATE)
-    lay = Layout(("none", "none"))
+def test_memory_is_declared_by_the_method_and_initialised_to_the_heading():
+    assert "held_heading" not in SHIP_STATE and Layout(("none", "none")).memory == ()
+    lay = Layout(("velocity-obstacle", "none"))
+    assert lay.memory == ("held_heading",) and lay.ship_state[-1] == "held_heading"
+    assert lay.ns == len(SHIP_STATE) + 1
     x = initial_state(lay, [{"start": (0, 0), "heading": 0.3, "speed": 1.0, "path": [[0, 0], [50, 0]]},
                             {"start": (9, 9), "heading": -1.2, "speed": 0.5, "path": [[9, 9], [0, 50]]}])
-    assert x[1 + S_["vo_heading"]] == 0.3 and x[1 + NS + S_["vo_heading"]] == -1.2
+    assert x[lay.row("held_heading", 0)] == 0.3 and x[lay.row("held_heading", 1)] == -1.2
 
 
 def test_heading_feasible_is_the_exact_collision_cone():
@@ -57,7 +61,7 @@ def _global_velocity(states):
 
 
 @pytest.mark.parametrize("case", ["head-on", "crossing"])
-def test_closed_loop_changes_its_vo_heading_only_when_it_became_forbidden(case):
+def test_closed_loop_changes_its_held_heading_only_when_it_became_forbidden(case):
     sc = with_method(colregs_cases()[case], "velocity-obstacle")
     res = run_scenario(sc, params={"vo_hold": True})
     tr = res.trajectory
@@ -92,4 +96,4 @@ def test_without_neighbours_the_memory_follows_the_heading():
          "ships": [{"name": "own", "start": [0.0, 0.0], "heading": 30.0, "speed": 1.0, "waypoints": [[60.0, 0.0]]}]}
     from mmg_casadi.scenarios.scenario import scenario_from_dict
     tr = run_scenario(scenario_from_dict(d)).trajectory
-    assert np.allclose(tr.state("vo_heading", 0)[1:], tr.state("psi", 0)[1:])
+    assert np.allclose(tr.state("held_heading", 0)[1:], tr.state("psi", 0)[1:])

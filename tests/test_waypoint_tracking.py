@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 from mmg_casadi.cli import main
-from mmg_casadi.closed_loop.step import S_, Layout, default_globals, initial_state, pack_params
+from mmg_casadi.closed_loop.layout import default_globals, Layout, pack_params
+from mmg_casadi.closed_loop.state import initial_state
+from mmg_casadi.closed_loop.outcome import S_
 from mmg_casadi.errors import InputError, ParameterError
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
 from mmg_casadi.scenarios.scenario import scenario_from_dict
@@ -133,7 +135,7 @@ def test_ship_leaving_the_envelope_is_reported_diverged():
     lay = Layout(methods=("none",), max_path=2)
     ships = [dict(n_rpm=115.5, path=[(0, 0), (50, 0)], start=(0, 0), heading=0.0, speed=1.0)]
     x0 = initial_state(lay, ships)
-    x0[1 + S_["u"]] = 50.0  # far outside any sane envelope
+    x0[lay.row("u", 0)] = 50.0  # far outside any sane envelope
     tr = simulate(lay, x0, pack_params(lay, default_globals(t_max=50.0), ships))
     assert tr.final[0][S_["status"]] == 2
     assert np.all(np.isfinite(tr.states))

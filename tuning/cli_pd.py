@@ -20,8 +20,10 @@ from mmg_casadi.io import write_json
 from mmg_casadi.errors import InputError, check_range
 
 from .linear import fit_nomoto_step
-from .pd import (PdSpec, analyse_gains, design_pd, paper_gains_map, plot_gain_map, plot_root_locus, plot_step,
-                 verify_nonlinear)
+from .pd.design import PdSpec, analyse_gains, design_pd
+from .pd.gain_map import paper_gains_map
+from .pd.plots import plot_gain_map, plot_root_locus, plot_step
+from .pd.verification import verify_nonlinear
 from .pd_tracking import design_for_tracking
 
 
@@ -61,7 +63,7 @@ def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None 
     zeta : float, optional
         Damping ratio (default 0.8).
     wn : float, optional
-        Natural frequency (U/L; default: the rule of :mod:`tuning.pd`).
+        Natural frequency (U/L; default: the rule of :mod:`tuning.pd.design`).
     tracking_tolerance : float
         Relative excess of the square's CE and MCTE over the paper gains' that the recommended gains may have
         (0: at least as good; see :mod:`tuning.pd_tracking`).

@@ -1,14 +1,14 @@
 """PD heading gains designed against a specification that includes path tracking (the waypoint square).
 
-Pole placement (:func:`tuning.pd.design_pd`) gives a well-damped but slow loop: at the design speed its
+Pole placement (:func:`tuning.pd.design.design_pd`) gives a well-damped but slow loop: at the design speed its
 ω_n ≈ 0.48 tracks the paper's waypoint square with MCTE ≈ 1.7 L against 0.22 L for the paper's
 K_p = 3.5, K_d = 4, whose dominant pair has ζ ≈ 0.32 and a 10° heading step overshoots ~11 %. This design asks
 for both at once:
 
-* **tracking**: on the waypoint square (:func:`tuning.pd.waypoint_square`, the nonlinear closed loop with
+* **tracking**: on the waypoint square (:func:`tuning.pd.verification.waypoint_square`, the nonlinear closed loop with
   ILOS) CE and MCTE no larger than the reference gains' (the paper's by default), times ``1 + tolerance``;
 * **damping**: among those gains, the smallest overshoot of the 10° heading step of the linear loop
-  (:func:`tuning.pd.analyse_gains`), ties broken by MCTE; the loop must be stable.
+  (:func:`tuning.pd.design.analyse_gains`), ties broken by MCTE; the loop must be stable.
 
 Measured (design speed): with ``tolerance = 0`` *no* other gain of a 0.1-spaced grid K_p ∈ [3.5, 6.5],
 K_d ∈ [3.6, 6.5] (929 stable points) nor of the default grid tracks the square with both CE ≤ 0.1367 and
@@ -38,7 +38,8 @@ import numpy as np
 
 from mmg_casadi.errors import InputError, check_range
 
-from .pd import PAPER_GAINS, analyse_gains, waypoint_square
+from .pd.design import PAPER_GAINS, analyse_gains
+from .pd.verification import waypoint_square
 
 KP_GRID = tuple(np.round(np.arange(2.0, 8.01, 0.5), 4))
 """Default K_p grid (the paper's 3.5 on it)."""

@@ -24,14 +24,14 @@ and normalisations are applied in closed form to the final accumulators and thei
 
 Measured (2 cores, shared): objective + gradient of 8 environment-5 voyages (10 ships, 4 obstacles) in 0.86 s
 for 2952 scenario-steps, 0.29 ms per scenario-step with ``threads=2``; the reverse-mode gradient of the MX
-rollout in CasADi's virtual machine (:class:`tuning.apf.SmoothProblem`, the same 8 scenarios) took 12.4 s for
+rollout in CasADi's virtual machine (:class:`tuning.apf_ipopt.SmoothProblem`, the same 8 scenarios) took 12.4 s for
 5411 scenario-steps, 2.3 ms per scenario-step (single thread). Over the default 200-scenario training set one
 evaluation takes 26–84 s depending on the load. The one-off compilation of an augmented step takes 68 s
 (environment 3) to 285 s (environment 5).
 
 The tuned parameters are θ = (k_vor0, r_safe); Λ_sink stays at the paper's −100 because without channel
 walls the closed loop only sees the direction of the field, which is linear in (K⁰_vor, Λ): only the ratio
-K⁰_vor/Λ matters (see :mod:`tuning.apf`), so searching K⁰_vor at fixed Λ covers the same trajectories.
+K⁰_vor/Λ matters (see :mod:`tuning.apf_ipopt`), so searching K⁰_vor at fixed Λ covers the same trajectories.
 """
 
 from __future__ import annotations
@@ -45,7 +45,8 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.closed_loop.step import AUX, GLOBAL_PARAMS, NS, S_, Layout, build_closed_loop_step
+from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, Layout
+from mmg_casadi.closed_loop.step import AUX, build_closed_loop_step
 from mmg_casadi.closed_loop.compiled import compile_function
 from mmg_casadi.errors import InputError, check_range
 from mmg_casadi.scenarios.run import build_problem
@@ -72,7 +73,7 @@ class SafetyConfig:
     Parameters
     ----------
     smooth : float
-        Sigmoid sharpness ``s`` of the smooth closed loop (as ``smooth`` of :class:`tuning.apf.TuningConfig`).
+        Sigmoid sharpness ``s`` of the smooth closed loop (as ``smooth`` of :class:`tuning.apf_ipopt.TuningConfig`).
     dt : float
         Guidance step of the training rollouts (the scenarios' own 0.25).
     max_steps : int
@@ -160,7 +161,7 @@ def build_augmented_step(layout: Layout, config: SafetyConfig = SafetyConfig()) 
     kap = config.kappa
 
     def st(xv, i, name):
-        return xv[1 + i * NS + S_[name]]
+        return xv[layout.row(name, i)]
 
     def pos(xv, i):
         return ca.vertcat(st(xv, i, "x"), st(xv, i, "y"))
@@ -303,7 +304,7 @@ def prepare_case(name: str, sc, config: SafetyConfig = SafetyConfig()) -> Safety
     config : SafetyConfig
         ``dt``, ``max_steps``, ``horizon_margin``, ``smooth``.
     """
-    from mmg_casadi.montecarlo.study import classify
+    from mmg_casadi.montecarlo.execution import classify
     from mmg_casadi.closed_loop.simulation import simulate_batch
     pr = build_problem(sc, {"k_vor0": PAPER[0], "r_safe": PAPER[1], "lam_sink": LAM_SINK})
     xf, _ = simulate_batch(pr.layout, pr.x0[:, None], pr.p[:, None])

@@ -1,6 +1,6 @@
 """Compiled rollouts of the closed loop: one scenario with its full history, or a batch keeping final states.
 
-The closed-loop step is compiled once per :class:`~mmg_casadi.closed_loop.step.Layout` (native code, cached on disk)
+The closed-loop step is compiled once per :class:`~mmg_casadi.closed_loop.layout.Layout` (native code, cached on disk)
 and rolled out with ``mapaccum`` in chunks of steps; a rollout stops after the chunk in which every ship has
 finished (reached its goal or diverged) or the horizon ``t_max`` (a step parameter) is reached.
 """
@@ -14,9 +14,10 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.closed_loop.step import (AUX, GLOBAL_PARAMS, NS, S_, SHIP_STATE, Layout, build_closed_loop_step,
-                          build_guidance)
 from mmg_casadi.closed_loop.compiled import compile_function
+from mmg_casadi.closed_loop.layout import Layout
+from mmg_casadi.closed_loop.state import ship_rows
+from mmg_casadi.closed_loop.step import AUX, build_closed_loop_step, build_guidance
 
 
 def rollout_functions(layout: Layout) -> list[ca.Function]:
@@ -119,7 +120,7 @@ def _chunk_history(layout: Layout, chunk: int, batch: int, every: int) -> ca.Fun
     x = ca.MX.sym("x", layout.nx, batch)
     p = ca.MX.sym("p", layout.np, batch)
     X, _ = F(x, p)
-    rows = [0] + [1 + i * NS + S_[name] for i in range(layout.n_ships) for name in HISTORY_STATE]
+    rows = [0] + [layout.row(name, i) for i in range(layout.n_ships) for name in HISTORY_STATE]
     cols = [k * batch + j for k in range(every - 1, chunk, every) for j in range(batch)]
     return ca.Function(f"chunk_hist_{layout.key()}_{chunk}_{batch}_{every}", [x, p],
                        [X[:, -batch:], X[rows, cols]])
@@ -128,7 +129,7 @@ def _chunk_history(layout: Layout, chunk: int, batch: int, every: int) -> ca.Fun
 def _finished(layout: Layout, x: np.ndarray, t_max) -> np.ndarray:
     """Per column of scenario states: every ship has stopped sailing, or that column's horizon is reached."""
     x = np.atleast_2d(x.T).T
-    status = x[1 + S_["status"]::NS, :][:layout.n_ships]
+    status = x[layout.rows("status"), :]
     return np.all(status != 0, axis=0) | (x[0] >= np.asarray(t_max) - 1e-9)
 
 
@@ -164,8 +165,8 @@ class Trajectory:
         Shape of the closed loop.
     t : ndarray (T+1,)
         Times of the stored states (non-dimensional).
-    states : ndarray (T+1, N, NS)
-        Ship states, columns named by :data:`~mmg_casadi.closed_loop.step.SHIP_STATE`.
+    states : ndarray (T+1, N, ns)
+        Ship states, columns named by :attr:`~mmg_casadi.closed_loop.layout.Layout.ship_state`.
     aux : ndarray (T, N, 4)
         Commanded rudder, desired heading, cross-track error and reactive flag used over each step.
     """
@@ -181,11 +182,11 @@ class Trajectory:
         Parameters
         ----------
         name : str
-            A name of :data:`~mmg_casadi.closed_loop.step.SHIP_STATE`.
+            A name of :attr:`~mmg_casadi.closed_loop.layout.Layout.ship_state`.
         ship : int, optional
             Ship index; all ships if omitted.
         """
-        col = self.states[:, :, S_[name]]
+        col = self.states[:, :, self.layout.column(name)]
         return col if ship is None else col[:, ship]
 
     def auxiliary(self, name: str, ship: int | None = None) -> np.ndarray:
@@ -203,7 +204,7 @@ class Trajectory:
 
     @property
     def final(self) -> np.ndarray:
-        """Final ship states ``(N, NS)``."""
+        """Final ship states ``(N, ns)``."""
         return self.states[-1]
 
     def sailing_mask(self) -> np.ndarray:
@@ -219,7 +220,7 @@ class Trajectory:
             Destination file.
         """
         np.savez_compressed(path, t=self.t, states=self.states, aux=self.aux,
-                            state_names=np.array(SHIP_STATE), aux_names=np.array(AUX))
+                            state_names=np.array(self.layout.ship_state), aux_names=np.array(AUX))
 
     def to_csv(self, path, names=None) -> None:
         """Long-format CSV: one row per (time, ship) with the MMG state and the auxiliary signals.
@@ -239,7 +240,7 @@ class Trajectory:
             fh.write(",".join(["t", "ship"] + cols + list(AUX)) + "\n")
             for k, tk in enumerate(self.t):
                 for i in range(self.layout.n_ships):
-                    vals = [self.states[k, i, S_[c]] for c in cols] + list(aux[k, i])
+                    vals = [self.states[k, i, self.layout.column(c)] for c in cols] + list(aux[k, i])
                     fh.write(f"{tk:.4f},{names[i]}," + ",".join(f"{v:.6g}" for v in vals) + "\n")
 
 
@@ -251,14 +252,14 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200)
     layout : Layout
         Shape of the closed loop.
     x0 : ndarray (nx,)
-        Initial scenario state (:func:`~mmg_casadi.closed_loop.step.initial_state`).
+        Initial scenario state (:func:`~mmg_casadi.closed_loop.state.initial_state`).
     p : ndarray (np,)
-        Parameter vector (:func:`~mmg_casadi.closed_loop.step.pack_params`).
+        Parameter vector (:func:`~mmg_casadi.closed_loop.layout.pack_params`).
     chunk : int
         Steps per compiled ``mapaccum`` call.
     """
     F = _chunk(layout, chunk, 1)
-    t_max = float(p[GLOBAL_PARAMS.index("t_max")])
+    t_max = float(p[layout.param_index("t_max")])
     xs, auxs = [np.asarray(x0, float)[:, None]], []
     x = np.asarray(x0, float)
     while not _finished(layout, x, t_max)[0]:
@@ -278,7 +279,7 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200)
     if fin.any():
         stop = int(np.argmax(fin))
     X, A = X[:, :stop + 1], A[:stop]
-    states = X[1:, :].T.reshape(X.shape[1], layout.n_ships, NS)
+    states = ship_rows(layout, X)
     return Trajectory(layout, X[0].copy(), states, A)
 
 
@@ -333,7 +334,7 @@ def _stream(layout: Layout, X0, P, width, call) -> tuple[np.ndarray, float]:
     P = np.asarray(P, float)
     M = X0.shape[1]
     width = M if width is None else max(1, min(int(width), M))
-    t_row = GLOBAL_PARAMS.index("t_max")
+    t_row = layout.param_index("t_max")
     out = X0.copy()
     active = [j for j in range(M) if not _finished(layout, X0[:, j:j + 1], P[t_row, j])[0]]
     pending = active[width:]
@@ -421,7 +422,7 @@ def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chu
         raise ValueError(f"every: expected an integer >= 1 dividing chunk={chunk}, got {every!r}")
     X0 = np.asarray(X0, float)
     M, N = X0.shape[1], layout.n_ships
-    rows = [0] + [1 + i * NS + S_[name] for i in range(N) for name in HISTORY_STATE]
+    rows = [0] + [layout.row(name, i) for i in range(N) for name in HISTORY_STATE]
     hist: list[list[np.ndarray]] = [[X0[rows, j][None, :]] for j in range(M)]
 
     def call(x, p, active):

@@ -1,1 +1,1 @@
-"""COLREG machinery: encounter classification and rule scoring (numpy post-processing)."""
+"""COLREG machinery: geometry, encounter classification, rule scoring, pair assessment (numpy post-processing)."""

@@ -1,6 +1,6 @@
 """The own ship's COLREG compliance in one run, from a (decimated) history of positions and headings.
 
-Each other ship is paired with the own ship (ship 0) and judged by :func:`mmg_casadi.colregs.classify.assess_pair` (the
+Each other ship is paired with the own ship (ship 0) and judged by :func:`mmg_casadi.colregs.assess.assess_pair` (the
 rule-by-rule scorer) under a COLREG profile; static obstacles are not COLREG encounters. An encounter is
 *classified* when the pair came within R_safe and the own ship's side of it is one of the COLREG encounter types
 (not ``"none"``) with at least one applicable rule. The run is compliant when every classified encounter of the
@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mmg_casadi.colregs import classify as colregs
+from mmg_casadi.colregs.classify import get_profile
 from mmg_casadi.colregs.score import score_pair
 from mmg_casadi.closed_loop.simulation import sailing_mask
 
@@ -47,7 +47,7 @@ def own_ship_compliance(t, states, *, r_safe: float, collision_distance: float,
     tuple
         ``(compliant, encounters)``: ``compliant`` is ``None`` when ``encounters`` is 0.
     """
-    profile = colregs.get_profile(profile)
+    profile = get_profile(profile)
     t = np.asarray(t, float)
     states = np.asarray(states, float)
     mask = sailing_mask(states[:, :, 3])
@@ -58,7 +58,7 @@ def own_ship_compliance(t, states, *, r_safe: float, collision_distance: float,
     near = np.any((dist <= r_safe) & mask[:, :1] & mask[:, 1:], axis=0)
     verdicts = []
     for j in 1 + np.flatnonzero(near):
-        # the own ship's side of colregs.assess_pair (the other ship's verdicts are not needed here)
+        # the own ship's side of assess_pair (the other ship's verdicts are not needed here)
         a = score_pair(t, pos0, psi0, states[:, j, :2], states[:, j, 2], r_safe=r_safe,
                        collision_distance=collision_distance, profile=profile, active_a=mask[:, 0],
                        active_b=mask[:, j], judge_b=False).a

@@ -26,7 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mmg_casadi.colregs.classify import LAB_PROFILE, ColregProfile, _bearing, _series, classify_encounter, wrap_to_pi
+from mmg_casadi.colregs.classify import LAB_PROFILE, ColregProfile, classify_encounter
+from mmg_casadi.colregs.geometry import bearing, pair_series, wrap_to_pi
 from mmg_casadi.errors import check_range
 
 #: rule keys of a side's verdicts: 17a = 17(a)(i), 17b = 17(a)(ii) with 17(b), 17c = 17(c)
@@ -250,8 +251,8 @@ def _side(enc, t, pos, psi, spd, pos_o, psi_o, cpa_pred, tcpa_pred, dist, k_ente
     acted = k_act is not None
     stbd, port = max(0.0, deg(np.max(dpsi))), max(0.0, -deg(np.min(dpsi)))
     slow = max(0.0, -float(np.min(dspd)))
-    bearing_cpa = _bearing(pos[k_cpa], psi[k_cpa], pos_o[k_cpa])
-    contact_cpa = _bearing(pos_o[k_cpa], psi_o[k_cpa], pos[k_cpa])
+    bearing_cpa = bearing(pos[k_cpa], psi[k_cpa], pos_o[k_cpa])
+    contact_cpa = bearing(pos_o[k_cpa], psi_o[k_cpa], pos[k_cpa])
     q = {
         "t_enter": t[k_enter], "range_enter": dist[k_enter],
         "cpa_distance": min_distance, "t_cpa": t[k_cpa], "tcpa_enter": tcpa_pred[k_enter],
@@ -306,7 +307,7 @@ def _side(enc, t, pos, psi, spd, pos_o, psi_o, cpa_pred, tcpa_pred, dist, k_ente
                         "t_must_act": q["t_must_act"], "cpa_distance": min_distance,
                         "collision_distance": collision_distance}
         if enc == "crossing-stand-on" and k_may is not None and altered:
-            on_port = np.array([_bearing(pos[k], psi[k], pos_o[k]) < 0.0 for k in window[after]])
+            on_port = np.array([bearing(pos[k], psi[k], pos_o[k]) < 0.0 for k in window[after]])
             to_port = wrap_to_pi(psi[window[after]] - psi[k_may])
             v["17c"] = not bool(np.any(on_port & (to_port <= -math.radians(profile.starboard_min_deg))))
             d["17c"] = {"from": t[k_may], "port_change_deg": max(0.0, -deg(float(np.min(to_port)))),
@@ -415,7 +416,7 @@ def score_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pro
     >>> s.b.encounter, s.b.verdicts["17a"], s.b.verdicts["17b"], s.b.compliant_all
     ('crossing-stand-on', True, False, False)
     """
-    t, pos_a, psi_a, pos_b, psi_b, both = _series(t, pos_a, psi_a, pos_b, psi_b, active_a, active_b)
+    t, pos_a, psi_a, pos_b, psi_b, both = pair_series(t, pos_a, psi_a, pos_b, psi_b, active_a, active_b)
     r_safe = check_range("r_safe", r_safe, 0.0, None, low_open=True, unit="L")
     collision_distance = check_range("collision_distance", collision_distance, 0.0, None, low_open=True, unit="L")
     idx = np.flatnonzero(both)

@@ -4,8 +4,12 @@ The closed-loop step (:mod:`mmg_casadi.closed_loop.step`), the scenario loader, 
 the benchmarks and the CLI all read :data:`METHODS`; adding a method is one entry here plus its builder.
 
 A builder takes a :class:`GuidanceInputs` (CasADi expressions of one ship and its neighbours inside the
-closed-loop step) and returns the 2×1 desired-heading vector of the method; the closed loop adds the channel
-walls' field and steers along the sum while any neighbour is within R_safe (or a wall within its range).
+closed-loop step) and returns a :class:`Command`: the 2×1 desired-heading vector of the method and, if the method
+declares ``commands_speed``, a desired propeller speed (rev/min), which the closed loop passes through the engine
+(:func:`mmg_casadi.vessel.actuators.engine_step`). The closed loop adds the hazards' field (channel walls) and steers
+along the sum while any neighbour is within R_safe (or a wall within its range); outside it the ship follows ILOS
+at its service propeller speed. A method that needs memory across steps declares its rows (``memory``); the
+closed loop adds them to the state of every ship of a layout that uses the method.
 
 Examples
 --------
@@ -51,12 +55,11 @@ class GuidanceInputs:
     nb_radius, active : SX (1×M)
         Neighbours' radii (L) and the 0/1 (or smooth) mask of neighbours present within R_safe.
     P : dict
-        The step's named numeric parameters (:data:`~mmg_casadi.closed_loop.step.GLOBAL_PARAMS`, angles in rad).
+        The step's named numeric parameters (:data:`~mmg_casadi.closed_loop.layout.GLOBAL_PARAMS`, angles in rad).
     layout : Layout
         The closed loop's shape (structural parameters such as the velocity obstacle's candidates and cone).
-    held_heading : SX, optional
-        The heading the method chose at the previous step while a neighbour was within R_safe, else the ship's
-        heading (state ``vo_heading``; rad).
+    memory : dict
+        The method's memory rows (:attr:`Method.memory`) at the start of the step, by name.
     """
 
     pos: object
@@ -70,7 +73,28 @@ class GuidanceInputs:
     active: object
     P: dict
     layout: object
-    held_heading: object = None
+    memory: dict = dataclasses.field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Command:
+    """What a method commands for one step.
+
+    Parameters
+    ----------
+    heading : SX (2×1)
+        Desired-heading vector (its direction is the desired heading; the closed loop adds the hazards' field).
+    rpm : SX, optional
+        Desired propeller speed (rev/min); only read for a method with ``commands_speed``; ``None`` keeps the
+        ship's service propeller speed.
+    memory : dict, optional
+        Next value of each of the method's memory rows while it is in charge (by name); when no neighbour is within
+        R_safe the closed loop resets every memory row to the ship's heading after the step.
+    """
+
+    heading: object
+    rpm: object = None
+    memory: dict = dataclasses.field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -94,6 +118,10 @@ class Method:
     goal_capture : bool
         A ship that passed its final waypoint outside the acceptance radius turns back to it (the paper's ILOS
         follows the extended last leg for ever; kept for the paper's methods).
+    memory : tuple of str
+        Names of the method's memory rows (state rows of each ship, rad; see :class:`Command`).
+    commands_speed : bool
+        The builder's :class:`Command` carries a propeller speed.
     """
 
     name: str
@@ -102,24 +130,63 @@ class Method:
     source: str
     inputs: tuple[str, ...] = ()
     goal_capture: bool = False
+    memory: tuple[str, ...] = ()
+    commands_speed: bool = False
+
+    def command_size(self) -> int:
+        """Rows of the flat command vector (:func:`command_vector`): heading, rpm if any, memory rows."""
+        return 2 + int(self.commands_speed) + len(self.memory)
+
+
+def command_vector(method: Method, command) -> ca.SX:
+    """A builder's :class:`Command` as one column (heading, then rpm if the method commands speed, then memory).
+
+    Parameters
+    ----------
+    method : Method
+        The method whose builder made ``command``.
+    command : Command
+        The builder's output.
+    """
+    parts = [command.heading]
+    if method.commands_speed:
+        parts.append(command.rpm)
+    parts += [command.memory[k] for k in method.memory]
+    return ca.vertcat(*parts)
+
+
+def command_from_vector(method: Method, v) -> Command:
+    """The :class:`Command` of a column made by :func:`command_vector`.
+
+    Parameters
+    ----------
+    method : Method
+        The method whose builder made the column.
+    v : SX or MX
+        The column (:meth:`Method.command_size` rows).
+    """
+    k = 2 + int(method.commands_speed)
+    return Command(v[0:2], v[2] if method.commands_speed else None,
+                   {name: v[k + j] for j, name in enumerate(method.memory)})
 
 
 def _inverse_square(g: GuidanceInputs):
     P = g.P
-    return fields.inverse_square(g.pos, g.goal, g.nb_pos, g.nb_radius, g.active, k_att=P["k_att"],
-                                 k_rep=P["k_rep"], d0=P["d0"])
+    return Command(fields.inverse_square(g.pos, g.goal, g.nb_pos, g.nb_radius, g.active, k_att=P["k_att"],
+                                         k_rep=P["k_rep"], d0=P["d0"]))
 
 
 def _sink_vortex(g: GuidanceInputs):
     P = g.P
-    return fields.sink_vortex(g.pos, g.goal, g.nb_pos, g.active, lam_sink=P["lam_sink"], k_vor=P["k_vor"])
+    return Command(fields.sink_vortex(g.pos, g.goal, g.nb_pos, g.active, lam_sink=P["lam_sink"], k_vor=P["k_vor"]))
 
 
 def _modified_vortex(g: GuidanceInputs):
     P = g.P
-    return fields.modified_vortex(g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active,
-                                  lam_sink=P["lam_sink"], k_vor0=P["k_vor0"], r_safe=P["r_safe"],
-                                  r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"], smooth=g.layout.smooth)
+    return Command(fields.modified_vortex(g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active,
+                                          lam_sink=P["lam_sink"], k_vor0=P["k_vor0"], r_safe=P["r_safe"],
+                                          r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"],
+                                          smooth=g.layout.smooth))
 
 
 _CV_FIELDS = tuple(f.name for f in dataclasses.fields(ColregsVortexParams))
@@ -127,10 +194,10 @@ _CV_FIELDS = tuple(f.name for f in dataclasses.fields(ColregsVortexParams))
 
 def _colregs_vortex(g: GuidanceInputs):
     P = g.P
-    return colregs_vortex.colregs_vortex(
+    return Command(colregs_vortex.colregs_vortex(
         g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active, lam_sink=P["lam_sink"], k_vor0=P["k_vor0"],
         r_safe=P["r_safe"], r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"],
-        n_candidates=g.layout.vo_candidates, **{k: P[f"cv_{k}"] for k in _CV_FIELDS})
+        n_candidates=g.layout.vo_candidates, **{k: P[f"cv_{k}"] for k in _CV_FIELDS}))
 
 
 def _velocity_obstacle(g: GuidanceInputs):
@@ -138,10 +205,11 @@ def _velocity_obstacle(g: GuidanceInputs):
     psi_vo = velocity_obstacle.velocity_obstacle(
         g.pos, g.speed, g.goal, g.nb_pos, g.nb_vel, g.active, collision_distance=D,
         n_candidates=g.layout.vo_candidates, cone=g.layout.vo_cone)
-    if g.layout.vo_hold and g.held_heading is not None:
-        psi_vo = velocity_obstacle.hold_heading(psi_vo, g.held_heading, g.pos, g.speed, g.nb_pos, g.nb_vel,
-                                                g.active, collision_distance=D, cone=g.layout.vo_cone)
-    return ca.vertcat(ca.cos(psi_vo), ca.sin(psi_vo))
+    if g.layout.vo_hold:
+        psi_vo = velocity_obstacle.hold_heading(psi_vo, g.memory["held_heading"], g.pos, g.speed, g.nb_pos,
+                                                g.nb_vel, g.active, collision_distance=D, cone=g.layout.vo_cone)
+    vec = ca.vertcat(ca.cos(psi_vo), ca.sin(psi_vo))
+    return Command(vec, memory={"held_heading": ca.atan2(vec[1], vec[0])})
 
 
 METHODS: dict[str, Method] = {m.name: m for m in (
@@ -150,13 +218,13 @@ METHODS: dict[str, Method] = {m.name: m for m in (
     Method("modified-vortex", _modified_vortex, ("sink-vortex", "modified-vortex"),
            "paper §4.3, eqs. (modified_vortex)–(factor_f)"),
     Method("velocity-obstacle", _velocity_obstacle, ("velocity-obstacle",),
-           "Huang et al. 2018 (Ocean Eng. 151), the paper's baseline"),
+           "Huang et al. 2018 (Ocean Eng. 151), the paper's baseline", memory=("held_heading",)),
     Method("none", None, (), "ILOS waypoint tracking only (a ship that holds its course)"),
     Method("colregs-vortex", _colregs_vortex, ("sink-vortex", "modified-vortex", "colregs-vortex"),
            "ours: the modified vortex with COLREG Rules 8, 13 and 17 (mmg_casadi.guidance.colregs_vortex)",
            inputs=tuple(f"cv_{k}" for k in _CV_FIELDS), goal_capture=True),
 )}
-"""Every method, by name."""
+"""Every method, by name (:func:`register` adds one)."""
 
 NAMES: tuple[str, ...] = tuple(METHODS)
 """Method names in registry order."""
@@ -191,7 +259,7 @@ def get(name, field: str = "method") -> Method:
     mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, none, colregs-vortex, got 'vortex'
     """
     if not isinstance(name, str) or name not in METHODS:
-        raise InputError(field, f"one of: {', '.join(NAMES)}", name)
+        raise InputError(field, f"one of: {', '.join(METHODS)}", name)
     return METHODS[name]
 
 

@@ -13,7 +13,7 @@
 ``encounter``/``compliant`` are from ship ``a``'s side (``encounter_b``/``compliant_b`` from ``b``'s);
 static obstacles appear as ``b = "obstacle<k>"`` with encounter ``"static"`` (no ``rules``). ``rules`` is the
 rule-by-rule COLREG scoring of a ship pair under the chosen profile (:func:`mmg_casadi.colregs.score.score_pair`).
-Outcome, CE and MCTE come from :meth:`mmg_casadi.closed_loop.step.ClosedLoopModel.outcomes` (``ce``/``mcte`` are null
+Outcome, CE and MCTE come from :meth:`mmg_casadi.closed_loop.problem.ClosedLoopModel.outcomes` (``ce``/``mcte`` are null
 for a diverged ship).
 """
 
@@ -24,8 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from mmg_casadi.colregs import classify as colregs
-from mmg_casadi.closed_loop.step import build_problem
+from mmg_casadi.colregs.assess import assess_pair
+from mmg_casadi.colregs.classify import get_profile
+from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.errors import InputError
 from mmg_casadi.io import json_safe, write_json
 from mmg_casadi.scenarios.scenario import Scenario, load_scenario, with_method
@@ -210,8 +211,8 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
         COLREG threshold profile or its name (:data:`mmg_casadi.colregs.classify.PROFILES`; default: the paper
         laboratory's).
     """
-    from mmg_casadi.closed_loop.step import ClosedLoopModel
-    profile = colregs.get_profile(profile)
+    from mmg_casadi.closed_loop.problem import ClosedLoopModel
+    profile = get_profile(profile)
     g = {k: params[k] for k in ("r_safe", "collision_distance")}
     names = [s.name for s in sc.ships]
     N = len(names)
@@ -243,9 +244,9 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
         pi = np.column_stack([traj.state("x", i), traj.state("y", i)])
         for j in range(i + 1, N):
             pj = np.column_stack([traj.state("x", j), traj.state("y", j)])
-            a = colregs.assess_pair(traj.t, pi, traj.state("psi", i), pj, traj.state("psi", j),
-                                    r_safe=g["r_safe"], collision_distance=g["collision_distance"],
-                                    profile=profile, active_a=mask[:, i], active_b=mask[:, j])
+            a = assess_pair(traj.t, pi, traj.state("psi", i), pj, traj.state("psi", j),
+                            r_safe=g["r_safe"], collision_distance=g["collision_distance"],
+                            profile=profile, active_a=mask[:, i], active_b=mask[:, j])
             pairs.append({"a": names[i], "b": names[j], "min_distance": float(a.min_distance),
                           "t_min": float(a.t_min), "encounter": a.encounter, "compliant": a.compliant,
                           "encounter_b": a.encounter_b, "compliant_b": a.compliant_b,

@@ -1,4 +1,5 @@
-"""Scenario files: ships, static obstacles and channel walls of one encounter (TOML, read with :mod:`tomllib`).
+"""Scenario files: ships, static obstacles and channel walls of one encounter (TOML, read with :mod:`tomllib`,
+written with ``tomli_w``).
 
 Conventions: positions in ship lengths L, x forward/north and y to starboard/east, headings in degrees measured
 from x towards y (clockwise in the marine view, x up and y right), speeds as fractions of the design speed,
@@ -52,6 +53,8 @@ import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import tomli_w
 
 from mmg_casadi.guidance import methods
 from mmg_casadi.errors import ParameterError, ScenarioError, check_range
@@ -656,61 +659,10 @@ def scenario_to_dict(s: Scenario) -> dict:
     }
 
 
-def _toml_string(text: str) -> str:
-    """``text`` as a TOML basic string."""
-    out = []
-    for ch in text:
-        if ch in '"\\':
-            out.append("\\" + ch)
-        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
-            out.append(f"\\u{ord(ch):04x}")
-        else:
-            out.append(ch)
-    return '"' + "".join(out) + '"'
-
-
-def _toml_value(value) -> str:
-    """A TOML value: bool, int, float, string or (nested) array of these."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        return repr(value)
-    if isinstance(value, str):
-        return _toml_string(value)
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    raise TypeError(f"cannot write {type(value).__name__} as a TOML value")
-
-
-def _is_table_array(value) -> bool:
-    """True for a non-empty list of dicts (an array of tables)."""
-    return isinstance(value, list) and bool(value) and all(isinstance(v, dict) for v in value)
-
-
-def _toml_pairs(d: dict) -> list[str]:
-    """``key = value`` lines of a table holding only values."""
-    return [f"{k} = {_toml_value(v)}" for k, v in d.items()]
-
-
-def _dumps_toml(d: dict) -> str:
-    """A small TOML writer: root values, then tables, then arrays of tables (no deeper nesting)."""
-    lines = [f"{k} = {_toml_value(v)}" for k, v in d.items() if not isinstance(v, dict) and not _is_table_array(v)]
-    for k, v in d.items():
-        if isinstance(v, dict):
-            lines += ["", f"[{k}]"] + _toml_pairs(v)
-    for k, v in d.items():
-        if _is_table_array(v):
-            for item in v:
-                lines += ["", f"[[{k}]]"] + _toml_pairs(item)
-    return "\n".join(lines).lstrip("\n") + "\n"
-
-
 def dump_scenario(s: Scenario) -> str:
     """``s`` as scenario-file TOML text; ``scenario_from_dict(tomllib.loads(dump_scenario(s))) == s``.
 
-    Empty ``obstacles`` and ``walls`` are left out.
+    :func:`scenario_to_dict` without its empty ``obstacles`` and ``walls``, written by ``tomli_w.dumps``.
 
     Parameters
     ----------
@@ -731,14 +683,21 @@ def dump_scenario(s: Scenario) -> str:
     <BLANKLINE>
     [[ships]]
     name = "own"
-    start = [0.0, 0.0]
+    start = [
+        0.0,
+        0.0,
+    ]
     heading = 0.0
     speed = 1.0
-    waypoints = [[50.0, 0.0]]
+    waypoints = [
+        [
+            50.0,
+            0.0,
+        ],
+    ]
     stays = false
     <BLANKLINE>
     >>> scenario_from_dict(tomllib.loads(dump_scenario(s))) == s
     True
     """
-    d = {k: v for k, v in scenario_to_dict(s).items() if v}
-    return _dumps_toml(d)
+    return tomli_w.dumps({k: v for k, v in scenario_to_dict(s).items() if v})

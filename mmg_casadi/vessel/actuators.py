@@ -47,3 +47,27 @@ def steering_rate(delta, delta_c, T_delta, rate_max, delta_max):
     """
     dc = saturate(delta_c, delta_max)
     return saturate((dc - delta) / T_delta, rate_max)  # eq. (delta_dot_equation)
+
+
+def engine_step(n, n_c, rate_max, dt):
+    """Propeller speed after one guidance step: the engine moves towards the command at a bounded rate.
+
+    ``n_next = n + sat(n_c - n, rate_max dt)``; a command equal to the present speed leaves it exactly unchanged.
+
+    Parameters
+    ----------
+    n : float or casadi.SX or casadi.MX
+        Propeller speed at the start of the step (rev/min).
+    n_c : float or casadi.SX or casadi.MX
+        Commanded propeller speed (rev/min).
+    rate_max : float or casadi.SX or casadi.MX
+        Largest change of propeller speed per unit time (rev/min per L/U).
+    dt : float or casadi.SX or casadi.MX
+        Guidance step (L/U).
+
+    Examples
+    --------
+    >>> float(engine_step(100.0, 50.0, 10.0, 0.25)), float(engine_step(100.0, 99.0, 10.0, 0.25))
+    (97.5, 99.0)
+    """
+    return n + saturate(n_c - n, rate_max * dt)

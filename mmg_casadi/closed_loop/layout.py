@@ -1,0 +1,423 @@
+"""The closed loop's shape: which ships, methods, vessels and hazards, and how its state and parameters are laid out.
+
+Scenario state (one column): ``[t, ship_0, ship_1, ...]``, each ship a block of :attr:`Layout.ns` rows named by
+:attr:`Layout.ship_state` (the rows :data:`SHIP_STATE` of every ship, then the memory rows of the layout's methods).
+Consumers read it through names only: :meth:`Layout.row`, :meth:`Layout.rows`, :meth:`Layout.ship_block` and
+:func:`mmg_casadi.closed_loop.state.ship_rows`.
+
+Numeric parameters (gains, field constants, speeds, paths, obstacles, walls) are an input vector ``p`` laid out by
+:meth:`Layout.split_params` / :func:`pack_params`, so one compiled Function serves every scenario of the same shape.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from mmg_casadi.guidance import methods
+from mmg_casadi.guidance.ilos import validate_waypoints
+from mmg_casadi.params import PARAMETERS, resolve
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel
+from mmg_casadi.vessel.ship import ShipParams
+
+SHIP_STATE = (
+    "u", "v", "r", "x", "y", "psi", "delta",  # MMG state
+    "n_prop",       # propeller speed (rev/min), the engine's state
+    "y_int",        # ILOS integrator state
+    "idx",          # index of the waypoint being tracked (column of the path)
+    "status",       # 0 sailing, 1 reached its goal, 2 diverged
+    "t_goal",       # time the goal was reached (-1 before)
+    "ce_int",       # ∫|δ| dt while sailing
+    "mcte_int",     # ∫|y_e| dt while sailing
+    "d_min",        # closest approach to any other ship or obstacle
+    "d_min_with",   # index of that agent (ships 0..N-1, obstacles N..N+S-1)
+    "t_collision",  # first time closer than the collision distance (-1 if never)
+    "collision_with",
+    "best_goal_dist",  # smallest distance to the final goal so far
+    "t_best",       # when it was reached
+    "x_best", "y_best",
+    "reactive_time",  # time spent under reactive guidance
+)
+
+
+GLOBAL_PARAMS = (
+    "dt", "r_safe", "collision_distance", "goal_tolerance",
+    "ilos_delta", "ilos_k", "kp", "kd", "delta_max",
+    "k_att", "k_rep", "d0", "lam_sink", "k_vor", "k_vor0", "r_tol_vortex", "gamma_max",
+    "wall_lam", "wall_d_act", "ship_radius", "t_max",
+)
+"""Numeric inputs of the compiled step, in order: the table's parameters (:mod:`mmg_casadi.params`) with the
+angles ``delta_max`` and ``gamma_max`` in rad (the table holds them in degrees); see :func:`step_values`."""
+_DEG_INPUTS = {"delta_max": "delta_max_deg", "gamma_max": "gamma_max_deg"}
+SHIP_PARAMS = ("n_rpm", "n_path", "stays", "engine_rate", "half_beam")
+"""Per-ship numeric inputs: service propeller speed (rev/min), waypoint count, whether the ship stays as an obstacle
+after its goal, the engine's largest rate (rev/min per L/U of the ship's vessel) and half its vessel's beam (L,
+the distance at which its side touches a wall)."""
+
+ENV_INPUTS = ("V_c", "beta_c", "U_w", "psi_w", "crab")
+"""Trailing numeric inputs of a disturbed step (:attr:`Layout.disturbed`): the model's disturbance ``env =
+[V_c, beta_c, U_w, psi_w]`` (:mod:`mmg_casadi.vessel.environment`, prime-II units, rad) and the crab-angle switch (0/1);
+see :func:`env_values`."""
+
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Shape of a closed-loop step: per-ship methods, number of obstacles and walls, path length.
+
+    Parameters
+    ----------
+    methods : tuple of str
+        Guidance method of each ship (a name in :data:`mmg_casadi.guidance.methods.METHODS`); the first ship is the own
+        ship.
+    n_obstacles, n_walls : int
+        Static circular obstacles and straight wall segments.
+    max_path : int
+        Columns of each ship's padded path (start + waypoints).
+    vo_candidates : int
+        Candidate headings of the velocity obstacle.
+    vo_cone : str
+        ``"wide"`` or ``"huang"`` (see :mod:`mmg_casadi.guidance.velocity_obstacle`).
+    vo_hold : bool
+        The velocity obstacle keeps its chosen heading while it stays feasible (``vo_heading`` state).
+    smooth : float or None
+        ``None`` for the exact switching logic; a sharpness ``s > 0`` replaces every switch by a sigmoid of
+        that sharpness (for gradient-based tuning).
+    disturbed : bool
+        Current / wind / crab-angle compensation present (:func:`is_disturbed`): the step takes the inputs
+        :data:`ENV_INPUTS` after the others. Calm layouts keep the calm-water step exactly.
+    vessels : tuple of str
+        Vessel of each ship (names of :data:`mmg_casadi.vessel.library.VESSELS`); empty: every ship is the
+        default vessel.
+    """
+
+    methods: tuple
+    n_obstacles: int = 0
+    n_walls: int = 0
+    max_path: int = 2
+    vo_candidates: int = PARAMETERS["vo_candidates"].default
+    vo_cone: str = PARAMETERS["vo_cone"].default
+    vo_hold: bool = PARAMETERS["vo_hold"].default
+    smooth: float | None = None
+    disturbed: bool = False
+    vessels: tuple = ()
+
+    @property
+    def n_ships(self) -> int:
+        """Number of ships."""
+        return len(self.methods)
+
+    def vessel(self, i: int) -> str:
+        """Vessel name of ship ``i``.
+
+        Parameters
+        ----------
+        i : int
+            Ship index.
+        """
+        return self.vessels[i] if self.vessels else DEFAULT_VESSEL
+
+    @property
+    def memory(self) -> tuple[str, ...]:
+        """Memory rows of the methods this layout uses (:attr:`mmg_casadi.guidance.methods.Method.memory`), in
+        registry order; every ship of the layout has them."""
+        used = set(self.methods)
+        out = []
+        for n, m in methods.METHODS.items():
+            out += [k for k in m.memory if n in used and k not in out]
+        return tuple(out)
+
+    @property
+    def ship_state(self) -> tuple[str, ...]:
+        """Names of one ship's rows of the scenario state: :data:`SHIP_STATE`, then :attr:`memory`."""
+        return SHIP_STATE + self.memory
+
+    @property
+    def ns(self) -> int:
+        """Rows of one ship's block of the scenario state."""
+        return len(SHIP_STATE) + len(self.memory)
+
+    @property
+    def nx(self) -> int:
+        """Rows of the scenario state."""
+        return 1 + self.n_ships * self.ns
+
+    def row(self, name: str, ship: int) -> int:
+        """Index of state row ``name`` of ship ``ship`` in the scenario state (row 0 is the time).
+
+        Parameters
+        ----------
+        name : str
+            A name of :attr:`ship_state`.
+        ship : int
+            Ship index.
+
+        Examples
+        --------
+        >>> lay = Layout(("none", "none"))
+        >>> lay.row("psi", 1) == 1 + lay.ns + SHIP_STATE.index("psi")
+        True
+        """
+        return 1 + ship * self.ns + self.ship_state.index(name)
+
+    def column(self, name: str) -> int:
+        """Index of state row ``name`` within a ship's block (a column of :func:`~mmg_casadi.closed_loop.state.ship_rows`).
+
+        Parameters
+        ----------
+        name : str
+            A name of :attr:`ship_state`.
+        """
+        return self.ship_state.index(name)
+
+    def rows(self, name: str) -> list[int]:
+        """Index of state row ``name`` of every ship, in ship order.
+
+        Parameters
+        ----------
+        name : str
+            A name of :attr:`ship_state`.
+        """
+        return [self.row(name, i) for i in range(self.n_ships)]
+
+    def ship_block(self, ship: int) -> slice:
+        """The rows of ship ``ship``'s block of the scenario state.
+
+        Parameters
+        ----------
+        ship : int
+            Ship index.
+        """
+        return slice(1 + ship * self.ns, 1 + (ship + 1) * self.ns)
+
+    @property
+    def n_agents(self) -> int:
+        return self.n_ships + self.n_obstacles
+
+    @property
+    def method_inputs(self) -> tuple[str, ...]:
+        """Numeric step inputs of the methods this layout uses (the ``inputs`` of each
+        :class:`mmg_casadi.guidance.methods.Method`), after the others in the parameter vector."""
+        used = set(self.methods)
+        return tuple(k for n, m in methods.METHODS.items() if n in used for k in m.inputs)
+
+    @property
+    def np(self) -> int:
+        """Rows of the parameter vector."""
+        return (len(GLOBAL_PARAMS) + self.n_ships * (len(SHIP_PARAMS) + 2 * self.max_path)
+                + 3 * self.n_obstacles + 4 * self.n_walls + (len(ENV_INPUTS) if self.disturbed else 0)
+                + len(self.method_inputs))
+
+    def key(self) -> str:
+        """Short identifier used in Function names."""
+        meth = "_".join(m.replace("-", "") for m in self.methods)
+        if len(set(self.methods)) == 1:
+            meth = f"{self.methods[0].replace('-', '')}x{self.n_ships}"
+        s = "" if self.smooth is None else f"_s{self.smooth:g}".replace(".", "p")
+        s += "_env" if self.disturbed else ""
+        if any(v != DEFAULT_VESSEL for v in self.vessels):
+            s += "_" + "_".join(self.vessels)
+        return (f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}"
+                f"{'h' if self.vo_hold else ''}{s}")
+
+    def param_index(self, name: str) -> int:
+        """Index of the global numeric input ``name`` (:data:`GLOBAL_PARAMS`) in the parameter vector.
+
+        Parameters
+        ----------
+        name : str
+            A name of :data:`GLOBAL_PARAMS`.
+        """
+        return GLOBAL_PARAMS.index(name)
+
+    def split_params(self, p):
+        """Split a parameter vector (symbolic or numeric) into named pieces.
+
+        Parameters
+        ----------
+        p : SX, MX, DM or ndarray
+            A parameter vector of this layout (:attr:`np` rows).
+        """
+        out = {}
+        i = 0
+        for name in GLOBAL_PARAMS:
+            out[name] = p[i]
+            i += 1
+        ships = []
+        for _ in range(self.n_ships):
+            d = {}
+            for name in SHIP_PARAMS:
+                d[name] = p[i]
+                i += 1
+            d["path"] = ca.reshape(p[i:i + 2 * self.max_path], 2, self.max_path)
+            i += 2 * self.max_path
+            ships.append(d)
+        out["ships"] = ships
+        out["obstacles"] = ca.reshape(p[i:i + 3 * self.n_obstacles], 3, self.n_obstacles)
+        i += 3 * self.n_obstacles
+        out["walls"] = ca.reshape(p[i:i + 4 * self.n_walls], 4, self.n_walls)
+        i += 4 * self.n_walls
+        if self.disturbed:
+            out["env"] = p[i:i + len(ENV_INPUTS)]
+            i += len(ENV_INPUTS)
+        for name in self.method_inputs:
+            out[name] = p[i]
+            i += 1
+        assert i == self.np
+        return out
+
+
+def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(), walls=(), env=None) -> np.ndarray:
+    """Numeric parameter vector for ``layout``.
+
+    ``ships[i]`` has ``n_rpm``, ``path`` (K_i x 2 array: start then waypoints) and ``stays``; paths are padded to
+    ``layout.max_path`` columns by repeating the last waypoint. The engine's rate is the table's
+    ``engine_rate_rpm_s`` (in ``globals_``) on the time scale of each ship's vessel. ``obstacles`` are ``(x, y, radius)``, walls
+    ``(ax, ay, bx, by)``; ``env`` the :data:`ENV_INPUTS` of a disturbed layout (:func:`env_values`).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout (ships, obstacles, walls, method) of the scenario.
+    globals_ : dict
+        The step's global numeric inputs (:func:`default_globals`, :func:`step_values`).
+    ships : list of dict
+        Per ship ``n_rpm``, ``path`` (L) and ``stays``.
+    obstacles : sequence of (float, float, float), optional
+        Static obstacles ``(x, y, radius)`` (L).
+    walls : sequence of (float, float, float, float), optional
+        Wall segments ``(ax, ay, bx, by)`` (L).
+    env : dict, optional
+        The :data:`ENV_INPUTS` of a disturbed layout (:func:`env_values`).
+    """
+    vals = [float(globals_[name]) for name in GLOBAL_PARAMS]
+    length_unit = load_vessel().ship.L  # lengths are in the default vessel's length
+    for i, s in enumerate(ships):
+        path = np.asarray(validate_waypoints(s["path"], f"ships[{i}].path"))
+        k = len(path)
+        if k > layout.max_path:
+            raise ValueError(f"path of {k} points exceeds layout.max_path={layout.max_path}")
+        padded = np.vstack([path, np.repeat(path[-1:], layout.max_path - k, axis=0)])
+        hull = load_vessel(layout.vessel(i)).ship
+        rate = float(globals_["engine_rate_rpm_s"]) * hull.time_scale_s
+        vals += [float(s["n_rpm"]), float(k), float(bool(s.get("stays", False))), rate, 0.5 * hull.B / length_unit]
+        vals += list(padded.reshape(-1))  # column-major (x0, y0, x1, y1, ...) = reshape(2, K)
+    for o in obstacles:
+        vals += [float(o[0]), float(o[1]), float(o[2])]
+    for w in walls:
+        vals += [float(v) for v in w]
+    if layout.disturbed:
+        if env is None or len(env) != len(ENV_INPUTS):
+            raise ValueError(f"a disturbed layout needs env = {ENV_INPUTS}, got {env!r}")
+        vals += [float(v) for v in env]
+    vals += [float(globals_[name]) for name in layout.method_inputs]
+    p = np.array(vals)
+    assert p.size == layout.np
+    return p
+
+
+
+def step_values(resolved: dict) -> dict:
+    """The step's numeric inputs (:data:`GLOBAL_PARAMS` and the ``inputs`` of every
+    :class:`~mmg_casadi.guidance.methods.Method`) from a resolved parameter set (table angles in degrees to rad).
+
+    Parameters
+    ----------
+    resolved : dict
+        A resolved parameter set (table names and units).
+
+    Examples
+    --------
+    >>> g = step_values(resolve())
+    >>> round(g["gamma_max"], 6), g["kp"]
+    (1.963495, 3.5)
+    """
+    out = {}
+    for name in GLOBAL_PARAMS:
+        src = _DEG_INPUTS.get(name)
+        out[name] = math.radians(float(resolved[src])) if src else float(resolved[name])
+    for m in methods.METHODS.values():
+        for name in m.inputs:
+            out[name] = math.radians(float(resolved[name + "_deg"])) if name not in resolved else float(resolved[name])
+    out["engine_rate_rpm_s"] = float(resolved["engine_rate_rpm_s"])
+    return out
+
+
+def is_disturbed(resolved: dict) -> bool:
+    """Whether a resolved parameter set has a current, a wind or crab-angle compensation (a disturbed layout).
+
+    Parameters
+    ----------
+    resolved : dict
+        A full parameter set (:func:`mmg_casadi.params.resolve`); only ``current_speed``, ``wind_speed`` and
+        ``crab_compensation`` are read (a direction without a speed does not count).
+
+    Returns
+    -------
+    bool
+        True if ``current_speed > 0``, ``wind_speed > 0`` or ``crab_compensation == "on"``.
+
+    Examples
+    --------
+    >>> is_disturbed(resolve()), is_disturbed(resolve({"current_direction_deg": 90.0}))
+    (False, False)
+    >>> is_disturbed(resolve({"wind_speed": 15.0}))
+    True
+    """
+    return (float(resolved["current_speed"]) > 0.0 or float(resolved["wind_speed"]) > 0.0
+            or resolved["crab_compensation"] == "on")
+
+
+def env_values(resolved: dict, ship: ShipParams | None = None) -> list[float]:
+    """The :data:`ENV_INPUTS` of a resolved parameter set: speeds over ``ship``'s design speed (default the KCS,
+    12.347 m/s; the table's current is already a fraction of it, its wind in m/s), directions in rad, crab 0/1.
+
+    Parameters
+    ----------
+    resolved : dict
+        A full parameter set (:func:`mmg_casadi.params.resolve`); reads ``current_speed`` (fraction of the
+        design speed), ``current_direction_deg`` and ``wind_direction_deg`` (deg), ``wind_speed`` (m/s) and
+        ``crab_compensation`` (``"on"`` or ``"off"``).
+    ship : ShipParams, optional
+        Ship whose design speed ``U_design`` [m/s] makes the wind speed non-dimensional; the default vessel
+        (:func:`mmg_casadi.vessel.library.load_vessel`) if omitted.
+
+    Returns
+    -------
+    list of float
+        ``[V_c, beta_c, U_w, psi_w, crab]`` in the order of :data:`ENV_INPUTS`.
+
+    Examples
+    --------
+    >>> [round(v, 4) for v in env_values(resolve({"current_speed": 0.1, "current_direction_deg": 90.0,
+    ...                                          "wind_speed": 15.0, "crab_compensation": "on"}))]
+    [0.1, 1.5708, 1.2149, 0.0, 1.0]
+    """
+    U = (ship or load_vessel().ship).U_design
+    return [float(resolved["current_speed"]), math.radians(float(resolved["current_direction_deg"])),
+            float(resolved["wind_speed"]) / U, math.radians(float(resolved["wind_direction_deg"])),
+            1.0 if resolved["crab_compensation"] == "on" else 0.0]
+
+
+def default_globals(**overrides) -> dict:
+    """The step's numeric inputs for the table's defaults updated with ``overrides`` (table names), checked.
+
+    Parameters
+    ----------
+    **overrides : float
+        Parameter values by table name, replacing the defaults.
+
+    Examples
+    --------
+    >>> g = default_globals(kp=2.0)
+    >>> g["kp"], g["kd"], g["d0"]
+    (2.0, 4.0, 8.0)
+    >>> default_globals(ilos_delta=-1.0)
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.ParameterError: ilos_delta: expected a number in (0, inf) L, got -1.0
+    """
+    return step_values(resolve(overrides))

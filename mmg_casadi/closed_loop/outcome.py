@@ -1,0 +1,151 @@
+"""The one judgement of a run: each ship's outcome and CE/MCTE from its final state.
+
+Every runner (single scenarios, the Monte Carlo, Imazu's problems, tuning) judges a run with these functions,
+through :meth:`mmg_casadi.closed_loop.problem.ClosedLoopModel.outcomes`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mmg_casadi.closed_loop.layout import SHIP_STATE, Layout
+from mmg_casadi.closed_loop.state import ship_rows
+from mmg_casadi.guidance import hazards
+
+S_ = {name: i for i, name in enumerate(SHIP_STATE)}
+"""Column of each common row in a ship's row (:data:`SHIP_STATE`; the memory rows follow them)."""
+
+OUTCOMES = ("reached", "diverged", "stalled", "timeout")
+"""A ship's outcome: reached its goal, left the model envelope, made no progress (``stall_window``), or none."""
+
+
+def ship_outcome(row, t_end: float, stall_window: float) -> tuple[str, tuple[float, float] | None]:
+    """Outcome of one ship from its final state row (:data:`SHIP_STATE`) — the one judgement every runner uses.
+
+    Returns the outcome (one of :data:`OUTCOMES`) and, for ``"stalled"``, the position closest to the goal.
+
+    Parameters
+    ----------
+    row : numpy.ndarray (ns,)
+        Final state row of the ship (:data:`SHIP_STATE`, then any memory rows).
+    t_end : float
+        End time of the run (L/U).
+    stall_window : float
+        A ship that has not come closer to its goal for this long is stalled (L/U).
+
+    Examples
+    --------
+    >>> row = np.zeros(len(SHIP_STATE)); row[S_["status"]] = 1
+    >>> ship_outcome(row, 80.0, 50.0)
+    ('reached', None)
+    >>> row[S_["status"]] = 0; row[S_["t_best"]] = 20.0; row[S_["x_best"]] = 3.0
+    >>> ship_outcome(row, 300.0, 50.0)
+    ('stalled', (3.0, 0.0))
+    """
+    status = row[S_["status"]]
+    if status == 1:
+        return "reached", None
+    if status == 2:
+        return "diverged", None
+    if t_end - row[S_["t_best"]] >= stall_window:
+        return "stalled", (float(row[S_["x_best"]]), float(row[S_["y_best"]]))
+    return "timeout", None
+
+
+def voyage_metrics(rows: np.ndarray, t_end: float, delta_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """CE and MCTE of every ship from final state rows ``(N, ns)`` — the one definition every runner uses.
+
+    ``CE = ∫|δ| dt / (δ_max T)`` (eq. (controller_effort_equation)) and ``MCTE = ∫|y_e| dt / T`` (eq.
+    (crosstrack_metric_equation)) with the integrals accumulated by the compiled step while the ship sails
+    (trapezoidal in δ, the cross-track error sampled at each step's start) and ``T`` the time to goal, or the
+    end time for a ship still sailing; ``nan`` for a diverged ship (its voyage time is not in the state).
+
+    Parameters
+    ----------
+    rows : numpy.ndarray (N, ns)
+        Final state rows of the ships.
+    t_end : float
+        End time of the run (L/U).
+    delta_max : float
+        Largest rudder angle δ_max (rad).
+
+    Examples
+    --------
+    >>> rows = np.zeros((1, len(SHIP_STATE))); rows[0, S_["status"]] = 1; rows[0, S_["t_goal"]] = 10.0
+    >>> rows[0, S_["ce_int"]] = 1.0; rows[0, S_["mcte_int"]] = 5.0
+    >>> ce, mcte = voyage_metrics(rows, 10.0, 0.5)
+    >>> float(ce[0]), float(mcte[0])
+    (0.2, 0.5)
+    """
+    rows = np.atleast_2d(np.asarray(rows, float))
+    status = rows[:, S_["status"]]
+    T = np.where(status == 1, rows[:, S_["t_goal"]], np.where(status == 0, t_end, np.nan))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        T = np.where(T > 0, T, np.nan)
+        return rows[:, S_["ce_int"]] / (delta_max * T), rows[:, S_["mcte_int"]] / T
+
+
+def collision_kind(layout: Layout, agent: int) -> str:
+    """What agent index ``agent`` of a ship's ``collision_with`` / ``d_min_with`` row is: ``"ship"`` or a hazard
+    kind of :data:`~mmg_casadi.guidance.hazards.KINDS` (``"obstacle"``, ``"wall"``).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout of the run.
+    agent : int
+        Agent index: ships ``0..N-1``, then obstacles, then wall segments.
+
+    Examples
+    --------
+    >>> lay = Layout(("none", "none"), n_obstacles=1, n_walls=2)
+    >>> [collision_kind(lay, j) for j in range(5)]
+    ['ship', 'ship', 'obstacle', 'wall', 'wall']
+    """
+    if agent < layout.n_ships:
+        return "ship"
+    k = agent - layout.n_ships
+    for name, count in (("obstacle", layout.n_obstacles), ("wall", layout.n_walls)):
+        if k < count:
+            return hazards.KINDS[name].name
+        k -= count
+    raise ValueError(f"agent {agent} is not in a layout of {layout.n_agents + layout.n_walls} agents")
+
+
+def ship_outcomes(layout: Layout, x_final, params: dict) -> list[dict]:
+    """Per ship: outcome, stalled position, time to goal, CE, MCTE, collision (when, with whom, which kind) and
+    closest approach, from the final scenario state — what every runner reports.
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout of the run.
+    x_final : ndarray (nx,)
+        Final scenario state.
+    params : dict
+        The resolved parameter set (reads ``delta_max_deg`` and ``stall_window``).
+    """
+    x = np.asarray(x_final, float).ravel()
+    rows = ship_rows(layout, x)
+    t_end = float(x[0])
+    ce, mcte = voyage_metrics(rows, t_end, math.radians(params["delta_max_deg"]))
+    out = []
+    for i, row in enumerate(rows):
+        status, where = ship_outcome(row, t_end, float(params["stall_window"]))
+        t_col = float(row[S_["t_collision"]])
+        d_min = float(row[S_["d_min"]])
+        out.append({
+            "status": status, "stalled_at": where,
+            "stalled_time": float(row[S_["t_best"]]) if status == "stalled" else None,
+            "time_to_goal": float(row[S_["t_goal"]]) if status == "reached" else None,
+            "ce": float(ce[i]), "mcte": float(mcte[i]),
+            "collision_time": t_col if t_col >= 0 else None,
+            "collision_with": int(row[S_["collision_with"]]) if t_col >= 0 else None,
+            "collision_kind": collision_kind(layout, int(row[S_["collision_with"]])) if t_col >= 0 else None,
+            "min_distance": d_min if d_min < 1e5 else None,
+            "min_distance_with": int(row[S_["d_min_with"]]) if d_min < 1e5 else None,
+            "reactive_time": float(row[S_["reactive_time"]]),
+        })
+    return out

@@ -1,0 +1,203 @@
+"""The closed loop declared once: :class:`ClosedLoopModel` (layout + resolved parameters) and the :class:`Problem`
+of a scenario, consumed by simulation, the Monte Carlo, Imazu's problems and tuning.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from mmg_casadi.closed_loop import state as state_
+from mmg_casadi.closed_loop.layout import Layout, env_values, is_disturbed, pack_params, step_values
+from mmg_casadi.closed_loop.outcome import ship_outcomes
+from mmg_casadi.closed_loop.simulation import compiled_step
+from mmg_casadi.closed_loop.step import build_closed_loop_step
+from mmg_casadi.errors import ParameterError, ScenarioError
+from mmg_casadi.guidance import methods
+from mmg_casadi.params import resolve
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel
+from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
+
+@dataclass(frozen=True)
+class ClosedLoopModel:
+    """The closed loop of one scenario shape, declared once and consumed by simulation, Monte Carlo and tuning.
+
+    Parameters
+    ----------
+    layout : Layout
+        Ships' methods, obstacles, walls, path length and the structural parameters.
+    params : dict
+        The resolved parameter set (every entry of :data:`mmg_casadi.params.PARAMETERS`).
+
+    Examples
+    --------
+    >>> m = ClosedLoopModel(Layout(("none",)), resolve())
+    >>> m.values["kp"], m.layout.nx == 1 + m.layout.ns
+    (3.5, True)
+    """
+
+    layout: Layout
+    params: dict = field(hash=False, compare=False)
+
+    @property
+    def values(self) -> dict:
+        """The step's numeric inputs by name (:func:`step_values`)."""
+        return step_values(self.params)
+
+    def step(self, *, smooth: float | None = None) -> ca.Function:
+        """The exact or smoothed symbolic step ``(x, p) -> (x_next, aux)``.
+
+        Parameters
+        ----------
+        smooth : float, optional
+            ``None`` for the exact switching logic, else the sigmoid sharpness of the smoothed step (tuning).
+        """
+        lay = self.layout if smooth is None else dataclasses.replace(self.layout, smooth=float(smooth))
+        return build_closed_loop_step(lay)
+
+    def compiled_step(self) -> ca.Function:
+        """The natively compiled exact step the rollouts use (its sparse form, cached on disk)."""
+        return compiled_step(self.layout)
+
+    def pack(self, ships: list[dict], obstacles=(), walls=()) -> np.ndarray:
+        """Numeric parameter vector (:func:`pack_params`) with this model's parameter values.
+
+        Parameters
+        ----------
+        ships : list of dict
+            Per ship ``n_rpm``, ``path`` (start then waypoints) and ``stays``.
+        obstacles : sequence of (x, y, radius)
+            Static obstacles.
+        walls : sequence of (ax, ay, bx, by)
+            Wall segments.
+        """
+        return pack_params(self.layout, self.values, ships, obstacles, walls,
+                           env_values(self.params) if self.layout.disturbed else None)
+
+    def initial_state(self, ships: list[dict]) -> np.ndarray:
+        """Scenario state at t = 0 (:func:`initial_state`).
+
+        Parameters
+        ----------
+        ships : list of dict
+            Per ship ``start``, ``heading`` (rad), ``speed`` and ``path``.
+        """
+        return state_.initial_state(self.layout, ships)
+
+    def ship_rows(self, X) -> np.ndarray:
+        """Ship rows of scenario states: ``(N, NS)`` for one state, ``(T, N, NS)`` for columns ``(nx, T)``.
+
+        Parameters
+        ----------
+        X : ndarray
+            One scenario state ``(nx,)`` or states as columns ``(nx, T)``.
+        """
+        return state_.ship_rows(self.layout, X)
+
+    def state(self, x, name: str, ship: int | None = None):
+        """One state variable of every ship (or of ``ship``) in the state(s) ``x``.
+
+        Parameters
+        ----------
+        x : ndarray
+            One scenario state ``(nx,)`` or states as columns ``(nx, T)``.
+        name : str
+            A name of :attr:`Layout.ship_state <mmg_casadi.closed_loop.layout.Layout.ship_state>`.
+        ship : int, optional
+            Ship index; all ships if omitted.
+        """
+        return state_.state_of(self.layout, x, name, ship)
+
+    def outcomes(self, x_final) -> list[dict]:
+        """Per ship: outcome, stalled position, time to goal, CE, MCTE, collision and closest approach.
+
+        Every runner judges a run with this one method (:func:`~mmg_casadi.closed_loop.outcome.ship_outcomes`).
+
+        Parameters
+        ----------
+        x_final : ndarray (nx,)
+            Final scenario state.
+        """
+        return ship_outcomes(self.layout, x_final, self.params)
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A scenario ready to simulate.
+
+    Parameters
+    ----------
+    model : ClosedLoopModel
+        Its closed loop.
+    x0 : ndarray (nx,)
+        Initial state.
+    p : ndarray (np,)
+        Parameter vector.
+    ships : tuple of dict
+        The per-ship dicts given to :func:`pack_params` / :func:`initial_state`.
+    """
+
+    model: ClosedLoopModel
+    x0: np.ndarray = field(compare=False)
+    p: np.ndarray = field(compare=False)
+    ships: tuple = field(default=(), compare=False)
+
+    @property
+    def layout(self) -> Layout:
+        """The model's layout."""
+        return self.model.layout
+
+    @property
+    def params(self) -> dict:
+        """The resolved parameter set."""
+        return self.model.params
+
+
+def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
+    """The :class:`Problem` of a scenario: parameters resolved from the table, the scenario's settings and
+    ``params`` (which win), the layout from its ships, obstacles and walls.
+
+    Parameters
+    ----------
+    sc : Scenario
+        A validated scenario (:func:`mmg_casadi.scenarios.scenario.load_scenario`).
+    params : dict, optional
+        Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`).
+    error : type, optional
+        Error class for a bad override (default :class:`~mmg_casadi.errors.ParameterError`).
+
+    Examples
+    --------
+    >>> from mmg_casadi.scenarios.scenario import Scenario, Settings, ShipSpec
+    >>> sc = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
+    >>> pr = build_problem(sc, {"kp": 2.0})
+    >>> pr.layout.methods, pr.params["kp"], pr.params["t_max"]
+    (('none',), 2.0, 300.0)
+    """
+    resolved = sc.settings.resolved(params, cls=error or ParameterError)
+    methods_ = tuple(sc.method_of(i) for i in range(len(sc.ships)))
+    for i, m in enumerate(methods_):
+        if m not in methods.METHODS:
+            raise ScenarioError(f"ships[{i}].method", f"one of: {', '.join(methods.NAMES)}", m)
+    walls = []
+    for w in sc.walls:
+        pts = np.asarray(w.points, float)
+        walls += [(a[0], a[1], b[0], b[1]) for a, b in zip(pts[:-1], pts[1:])]
+    vessels = tuple(getattr(s, "vessel", None) or resolved["vessel"] for s in sc.ships)
+    for i, v in enumerate(vessels):
+        load_vessel(v, f"ships[{i}].vessel")
+    layout = Layout(methods=methods_, n_obstacles=len(sc.obstacles), n_walls=len(walls),
+                    max_path=max(1 + len(s.waypoints) for s in sc.ships),
+                    vo_candidates=resolved["vo_candidates"], vo_cone=resolved["vo_cone"],
+                    disturbed=is_disturbed(resolved), vo_hold=resolved["vo_hold"],
+                    vessels=() if set(vessels) == {DEFAULT_VESSEL} else vessels)
+    model = ClosedLoopModel(layout, resolved)
+    ships = tuple({"n_rpm": propeller_rpm_for_speed(s.speed, load_vessel(v).ship), "path": [s.start, *s.waypoints],
+                   "stays": s.stays, "start": s.start, "heading": s.heading_rad, "speed": s.speed}
+                  for s, v in zip(sc.ships, vessels))
+    obstacles = [(o.position[0], o.position[1], o.radius) for o in sc.obstacles]
+    return Problem(model, model.initial_state(list(ships)), model.pack(list(ships), obstacles, walls), ships)

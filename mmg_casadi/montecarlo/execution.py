@@ -1,0 +1,384 @@
+"""One batch of the statistical study: sampled scenarios rolled out together by the compiled closed loop, each
+run judged from its final state.
+
+:func:`run_batch` samples the runs of one (environment, method) with
+:func:`~mmg_casadi.montecarlo.sampling.sample_scenario` (so every method meets the same scenarios), stacks their
+initial states and parameter vectors as columns and rolls them out together with
+:func:`~mmg_casadi.closed_loop.simulation.simulate_batch`: *one* compiled step per (environment, method) (all its runs
+share one :class:`~mmg_casadi.closed_loop.layout.Layout`), ``map`` over the scenarios and ``mapaccum`` over chunks of
+steps until every scenario has finished. Each run is classified from its *final* state only
+(:func:`classify`): the closed-loop state carries goal time, CE/MCTE integrals, closest approach and the
+first collision of every ship. Every run becomes one row of :data:`~mmg_casadi.montecarlo.results.RUN_COLUMNS`.
+
+Outcome of a run (own ship = agent 0, judged from the final state):
+
+``success``
+    the own ship reached its goal (status 1, so ``t_goal <= t_max``) and never came closer than the collision
+    distance to another ship or a static obstacle (``t_collision < 0``).
+``fleet_success``
+    every ship reached its goal and no ship collided.
+``failure``
+    ``"collision"`` (own ship collided; ``failure_pair`` ``"0-j"`` for ship j or ``"0-obsk"`` for obstacle k,
+    ``failure_time`` the first collision time), ``"diverged"`` (the own ship left the model envelope),
+    ``"stalled"`` (not reached and no progress towards the goal for ``STALL_WINDOW`` before the end;
+    ``failure_time`` the time of its closest approach to the goal), ``"timeout"`` (otherwise;
+    ``failure_time`` = end time); ``""`` on success.
+
+``failure_mechanism``
+    why a failed run failed, one of :data:`mmg_casadi.montecarlo.failures.MECHANISMS` (``""`` on success): started too
+    close, obstacle near the goal, near-goal, ship–ship, obstacle, stalled, timeout, diverged (see there).
+``colregs_compliant``, ``colregs_encounters``
+    whether the own ship kept the COLREGs (profile ``iitm-lab``) in all of its classified encounters with other
+    ships, and how many there were (:func:`mmg_casadi.colregs.compliance.own_ship_compliance`, empty without one); judged
+    on a history of positions and headings kept every :data:`HISTORY_EVERY` guidance steps by
+    :func:`~mmg_casadi.closed_loop.simulation.simulate_batch_history`.
+
+Outcome, CE and MCTE are judged by :meth:`mmg_casadi.closed_loop.problem.ClosedLoopModel.outcomes`, as for a single
+scenario run (a diverged ship's CE/MCTE are ``nan``; summaries average them over successful runs only). Fleet
+metrics are means over the ships that reached their goals. ``guidance_call_us`` is the compiled time of one
+guidance evaluation (field / velocity obstacle + ILOS + PD) per ship, measured per batch on the batch's initial
+and final states (:func:`time_guidance`); it is a timing and differs between repetitions, everything else is a
+deterministic function of ``(environment, method, run, seed, t_max)``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from mmg_casadi.closed_loop.simulation import compiled_guidance, simulate_batch, simulate_batch_history
+from mmg_casadi.closed_loop.layout import Layout
+from mmg_casadi.closed_loop.problem import build_problem, ClosedLoopModel
+from mmg_casadi.colregs.compliance import own_ship_compliance
+from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
+from mmg_casadi.montecarlo.failures import failure_mechanism, turn_time_90, unavoidable_at_start
+from mmg_casadi.montecarlo.results import RUN_COLUMNS
+from mmg_casadi.montecarlo.sampling import sample_scenario
+from mmg_casadi.params import PARAMETERS, resolve
+from mmg_casadi.scenarios.scenario import Scenario, scenario_from_dict, with_params
+
+DEFAULT_CHUNK = 48
+"""Steps per ``mapaccum`` chunk (the rollout stops after the chunk in which every run has finished; outcomes do not
+depend on it: the clock stops at the horizon and a finished run is held)."""
+TIMING_COLUMNS: tuple[str, ...] = ("guidance_call_us",)
+"""Columns that are measurements of time (not reproducible run to run)."""
+
+
+# ----------------------------------------------------------------------------------------------- sampling
+
+def sampled_scenario(environment: int, method: str, run: int, base_seed: int = 0, *,
+                     params: dict | None = None) -> Scenario:
+    """The scenario of run ``run`` of ``environment`` with every ship using ``method`` and the parameter values
+    ``params`` written into its settings (replayable on its own).
+
+    Parameters
+    ----------
+    environment : int
+        Environment number.
+    method : str
+        Collision-avoidance method of every ship.
+    run : int
+        Run index.
+    base_seed : int, default 0
+        Base seed of the scenario sampling.
+    params : dict or None, optional
+        Parameter values (table names) written into the settings.
+
+    Examples
+    --------
+    >>> sc = sampled_scenario(1, "modified-vortex", 0, params={"t_max": 100.0})
+    >>> len(sc.ships), len(sc.obstacles), sc.settings.method, sc.settings.t_max
+    (3, 1, 'modified-vortex', 100.0)
+    """
+    sample = sample_scenario(environment, run, base_seed)
+    sc = scenario_from_dict(sample.to_scenario_dict(method=method), source=f"env{environment}/{method}/run{run}")
+    return with_params(sc, params)
+
+
+def _non_default(params: dict | None) -> dict:
+    """The entries of ``params`` that differ from the table's defaults (what a scenario file must carry)."""
+    return {k: v for k, v in (params or {}).items() if v != PARAMETERS[k].default}
+
+
+def layout_for(environment: int, method: str, params: dict | None = None) -> Layout:
+    """The closed-loop :class:`Layout` shared by all runs of ``(environment, method)`` with ``params``.
+
+    Parameters
+    ----------
+    environment : int
+        Environment number.
+    method : str
+        Collision-avoidance method.
+    params : dict or None, optional
+        Parameter overrides (table names).
+
+    Examples
+    --------
+    >>> lay = layout_for(2, "inverse-square")
+    >>> lay.n_ships, lay.n_obstacles, lay.max_path
+    (4, 2, 2)
+    """
+    return build_problem(sampled_scenario(environment, method, 0, 0, params=params)).layout
+
+
+# ------------------------------------------------------------------------------------------ classification
+
+def classify(model: ClosedLoopModel, x_final) -> dict:
+    """Outcome and metrics of one run from its final scenario state (see the module docstring).
+
+    Parameters
+    ----------
+    model : ClosedLoopModel
+        The run's closed loop (layout and resolved parameters).
+    x_final : array (nx,)
+        Final scenario state ``[t, ship_0, ship_1, ...]``.
+
+    Returns
+    -------
+    dict
+        The non-key columns of :data:`~mmg_casadi.montecarlo.results.RUN_COLUMNS` except ``seed`` and
+        ``guidance_call_us``.
+    """
+    x = np.asarray(x_final, float).ravel()
+    layout = model.layout
+    N = layout.n_ships
+    ships = model.outcomes(x)
+    own = ships[0]
+    reached = np.array([s["status"] == "reached" for s in ships])
+    collided = np.array([s["collision_time"] is not None for s in ships])
+    if collided[0]:
+        j = own["collision_with"]
+        failure, pair, failure_time = "collision", (f"0-{j}" if j < N else f"0-obs{j - N}"), own["collision_time"]
+    elif reached[0]:
+        failure, pair, failure_time = "", "", math.nan
+    elif own["status"] == "stalled":
+        failure, pair, failure_time = "stalled", "", own["stalled_time"]
+    elif own["status"] == "diverged":
+        failure, pair, failure_time = "diverged", "", math.nan
+    else:
+        failure, pair, failure_time = "timeout", "", float(x[0])
+
+    def fleet_mean(key):
+        v = [s[key] for s, r in zip(ships, reached) if r]
+        return float(np.mean(v)) if v else math.nan
+
+    return {
+        "success": bool(reached[0] and not collided[0]),
+        "fleet_success": bool(np.all(reached) and not np.any(collided)),
+        "failure": failure,
+        "failure_pair": pair,
+        "failure_time": failure_time,
+        "time_to_goal": own["time_to_goal"] if reached[0] else math.nan,
+        "ce": own["ce"],
+        "mcte": own["mcte"],
+        "fleet_time_to_goal": fleet_mean("time_to_goal"),
+        "fleet_ce": fleet_mean("ce"),
+        "fleet_mcte": fleet_mean("mcte"),
+        "min_distance": math.nan if own["min_distance"] is None else own["min_distance"],
+        "n_ships": N,
+        "n_obstacles": layout.n_obstacles,
+    }
+
+
+# ------------------------------------------------------------------------------------------ batch rollout
+
+@lru_cache(maxsize=32)
+def _mapped_guidance(layout: Layout, n: int) -> ca.Function:
+    return compiled_guidance(layout).map(n)
+
+
+MIN_TIMING_COLUMNS = 256
+"""Guidance timing evaluates at least this many scenario states per call (tiling the batch's states), so the
+Python call overhead is negligible against the compiled work."""
+
+
+def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: float = 0.02,
+                  max_repeats: int = 50) -> float:
+    """Compiled time per guidance call per ship (µs), from the states ``X`` (nx, K) with parameters ``P``.
+
+    The compiled guidance Function (:func:`~mmg_casadi.closed_loop.simulation.compiled_guidance`) is mapped over the
+    columns (tiled to at least :data:`MIN_TIMING_COLUMNS`), called once to warm up and then repeatedly for
+    about ``min_time`` seconds; the result is ``elapsed / (repeats * columns * N)``. Every ship is timed as
+    sailing (status 0, clock 0) in the positions of ``X``: the rollouts skip the guidance of a ship that no
+    longer sails, and a method sees only the neighbours within R_safe, so the time is that of the guidance
+    the rollouts run for ``N`` sailing ships in those configurations.
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout of the scenarios.
+    X : numpy.ndarray (nx, K)
+        Scenario states, one column per call.
+    P : numpy.ndarray (np, K)
+        Parameter vectors, one column per call (:func:`~mmg_casadi.closed_loop.layout.pack_params`).
+    min_time : float, default 0.02
+        Approximate measuring time (seconds).
+    max_repeats : int, default 50
+        Largest number of timed calls.
+    """
+    X = np.array(X, float)
+    P = np.asarray(P, float)
+    X[0] = 0.0
+    X[layout.rows("status")] = 0.0
+    reps = max(1, math.ceil(MIN_TIMING_COLUMNS / X.shape[1]))
+    X = np.tile(X, (1, reps))
+    P = np.tile(P, (1, reps))
+    n = X.shape[1]
+    F = _mapped_guidance(layout, n)
+    Xd, Pd = ca.DM(X), ca.DM(P)
+    F(Xd, Pd)  # warm-up (page in the library, allocate work vectors)
+    t0 = time.perf_counter()
+    F(Xd, Pd)
+    one = time.perf_counter() - t0
+    repeats = int(min(max_repeats, max(1, math.ceil(min_time / max(one, 1e-9)))))
+    t0 = time.perf_counter()
+    for _ in range(repeats):
+        F(Xd, Pd)
+    elapsed = time.perf_counter() - t0
+    return 1e6 * elapsed / (repeats * n * layout.n_ships)
+
+
+HISTORY_EVERY = 2
+"""The batch rollout keeps every 2nd guidance step (0.5 L/U) of positions and headings for the COLREG scoring."""
+
+
+def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
+    """``failure_mechanism``, ``colregs_compliant`` and ``colregs_encounters`` of one run.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The run's scenario (goals, obstacles).
+    model : ClosedLoopModel
+        Its closed loop (layout, resolved parameters).
+    x_final : array (nx,)
+        Final scenario state.
+    t, states : array (K,), (K, N, 4)
+        Decimated history (:meth:`mmg_casadi.closed_loop.simulation.BatchHistory.column`).
+    """
+    P = model.params
+    row = classify(model, x_final)
+    own = model.outcomes(x_final)[0]
+    goals = np.array([s.waypoints[-1] for s in scenario.ships], float)
+    obstacles = np.array([o.position for o in scenario.obstacles], float).reshape(-1, 2)
+    at = None
+    if own["collision_time"] is not None and len(t) > 1:
+        at = np.column_stack([np.interp(own["collision_time"], t, states[:, :, c][:, i])
+                              for i in range(states.shape[1]) for c in (0, 1)]).reshape(-1, 2)
+    unavoidable = False
+    if own["collision_time"] is not None:
+        j, ships = own["collision_with"], scenario.ships
+        if j < len(ships):
+            h = ships[j].heading_rad
+            other, vel = ships[j].start, (ships[j].speed * math.cos(h), ships[j].speed * math.sin(h))
+        else:
+            other, vel = obstacles[j - len(ships)], (0.0, 0.0)
+        unavoidable = unavoidable_at_start(ships[0].start, ships[0].heading_rad, ships[0].speed,
+                                           other, vel, collision_distance=float(P["collision_distance"]),
+                                           rudder_deg=float(P["delta_max_deg"]))
+    mech = failure_mechanism(row["failure"], collision_time=own["collision_time"],
+                             collision_with=own["collision_with"], goals=goals, obstacles=obstacles,
+                             positions_at_collision=at, turn_time=turn_time_90(float(P["delta_max_deg"])),
+                             near_goal_distance=float(P["near_goal_distance"]), unavoidable=unavoidable)
+    compliant, n = own_ship_compliance(t, states, r_safe=float(P["r_safe"]),
+                                       collision_distance=float(P["collision_distance"]))
+    return {"failure_mechanism": mech, "colregs_compliant": compliant, "colregs_encounters": n}
+
+
+def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT_CHUNK,
+                  time_guidance_calls: bool = True, explain: bool = True) -> list[dict]:
+    """Simulate scenarios together and classify each from its final state.
+
+    Scenarios with the same :class:`Layout` are rolled out as one batch (one compiled step, ``map`` over the
+    scenarios, ``mapaccum`` over chunks of ``chunk`` steps). Returns one dict per scenario, in order, with the
+    columns of :func:`classify` plus ``guidance_call_us`` (``nan`` unless ``time_guidance_calls``) and, with
+    ``explain``, the columns of :func:`explain_run` (from a history kept every :data:`HISTORY_EVERY` steps).
+
+    Parameters
+    ----------
+    scenarios : list of Scenario
+        The scenarios.
+    params : dict, optional
+        Parameter overrides applied to every scenario (they win over its settings).
+    chunk : int
+        Steps per compiled chunk.
+    time_guidance_calls : bool
+        Measure the compiled guidance call per ship of every batch.
+    explain : bool
+        Keep a history and add the failure mechanism and the own ship's COLREG compliance.
+    """
+    problems = [build_problem(sc, params) for sc in scenarios]
+    groups: dict[Layout, list[int]] = {}
+    for i, pr in enumerate(problems):
+        groups.setdefault(pr.layout, []).append(i)
+    out: list[dict | None] = [None] * len(problems)
+    for layout, idx in groups.items():
+        X0 = np.column_stack([problems[i].x0 for i in idx])
+        P = np.column_stack([problems[i].p for i in idx])
+        every = HISTORY_EVERY if chunk % HISTORY_EVERY == 0 else 1
+        if explain:
+            XF, _busy, hist = simulate_batch_history(layout, X0, P, chunk=chunk, every=every)
+        else:
+            XF, _busy = simulate_batch(layout, X0, P, chunk=chunk)
+        us = time_guidance(layout, np.hstack([X0, XF]), np.hstack([P, P])) if time_guidance_calls else math.nan
+        for col, i in enumerate(idx):
+            row = classify(problems[i].model, XF[:, col])
+            row["guidance_call_us"] = us
+            if explain:
+                row.update(explain_run(scenarios[i], problems[i].model, XF[:, col], *hist.column(col)))
+            out[i] = row
+    return out  # type: ignore[return-value]
+
+
+def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params: dict | None = None,
+              chunk: int = DEFAULT_CHUNK, disturbance: DisturbanceRanges | None = None) -> list[dict]:
+    """Simulate runs of one (environment, method) together and return their result rows.
+
+    Parameters
+    ----------
+    environment : int
+        Environment 1-5.
+    method : str
+        Collision-avoidance method of every ship.
+    runs : list of int
+        Run indices.
+    base_seed : int
+        Base seed of the study (stored in the ``seed`` column).
+    params : dict, optional
+        Parameter values of every run (by name; the table's defaults for the rest).
+    chunk : int
+        Steps per compiled chunk.
+    disturbance : DisturbanceRanges, optional
+        Ranges of the per-run current and wind (:func:`~mmg_casadi.montecarlo.disturbance_sampling.sample_disturbance`).
+
+    Returns
+    -------
+    list of dict
+        One row per run (keys :data:`~mmg_casadi.montecarlo.results.RUN_COLUMNS`), in the order of ``runs``.
+    """
+    runs = [int(r) for r in runs]
+    if not runs:
+        return []
+    overrides = _non_default(params)
+    env = _run_disturbances(environment, runs, base_seed, params, disturbance)
+    scenarios = [sampled_scenario(environment, method, r, base_seed, params=_non_default({**overrides, **d}))
+                 for r, d in zip(runs, env)]
+    results = run_scenarios(scenarios, chunk=chunk)
+    rows = []
+    for r, res, d in zip(runs, results, env):
+        row = {"environment": int(environment), "method": method, "run": r, "seed": int(base_seed), **res, **d}
+        rows.append({c: row.get(c) for c in RUN_COLUMNS})
+    return rows
+
+
+def _run_disturbances(environment: int, runs, base_seed: int, params: dict | None,
+                      ranges: DisturbanceRanges | None) -> list[dict]:
+    """Per run, the :data:`ENV_COLUMNS` values: sampled from ``ranges`` if any, else those of ``params``."""
+    if ranges is not None and ranges.active:
+        return [sample_disturbance(environment, r, base_seed, ranges) for r in runs]
+    fixed = resolve(params)
+    return [{c: fixed[c] for c in ENV_COLUMNS} for _ in runs]
