@@ -4,7 +4,7 @@ The flat public API::
 
     import mmg_casadi as mc
     r = mc.run_scenario("head_on.toml", params={"k_vor0": -15})
-    r.metrics, r.plot(), r.to_frame(), r.save("out")
+    r.metrics, r.plot(), r.to_pandas(), r.save("out")
 
 Examples
 --------
@@ -29,4 +29,4 @@ __all__ = [
     "build_problem", "linearise", "load_params", "load_scenario", "packaged_scenario", "resolve_params",
     "run_scenario", "run_study", "simulate", "turning_circle", "zigzag",
 ]
-__version__ = "0.2.0"
+__version__ = "0.3.0"

@@ -178,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("convert", help="maritime-schema traffic situation (.json) <-> scenario file (.toml)")
     c.add_argument("file", type=Path, help="input .json (maritime-schema) or .toml (scenario)")
     c.add_argument("--out", type=Path, required=True, help="output .toml or .json")
-    c.add_argument("--method", default="modified-vortex", help="json->toml: the own ship's method")
+    c.add_argument("--method", default=registry.DEFAULT, help="json->toml: the own ship's method")
     c.add_argument("--target-method", default="none", help="json->toml: the target ships' method")
     c.add_argument("--length-scale", default="kcs", help="json->toml: kcs (230 m) | own-ship")
     c.add_argument("--reference", default=None,

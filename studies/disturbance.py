@@ -35,11 +35,12 @@ from matplotlib.figure import Figure
 from mmg_casadi.scenarios.encounters import colregs_cases, waypoint_square
 from mmg_casadi.io import write_json
 from mmg_casadi.errors import InputError
-from mmg_casadi.params import check_value, resolve
+from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
+from mmg_casadi.params import PARAMETERS, check_value, resolve
 from mmg_casadi.plotting import COLORS, draw_path, marine_axes
 from mmg_casadi.scenarios.scenario import scenario_from_dict, with_params
-from tuning.pd.design import PdSpec, design_pd
 from mmg_casadi.scenarios.run import run_scenario, write_outputs
+from tuning.pd.design import PdSpec, design_pd
 
 from ._common import run_cases
 
@@ -47,8 +48,8 @@ LEG_LENGTH = 250.0
 """Straight leg (L): the ship is still sailing at t = 200 L/U_des, five integral time constants."""
 STEADY_WINDOW = (150.0, 200.0)
 """Time window (L/U_des) over which the steady cross-track offset is averaged."""
-PAPER_GAINS = (3.5, 4.0)
-ILOS_K = 0.05
+PAPER_GAINS = (PARAMETERS["kp"].default, PARAMETERS["kd"].default)
+ILOS_K = PARAMETERS["ilos_k"].default
 """The paper's ILOS integral ratio."""
 
 
@@ -213,7 +214,7 @@ def run(out, *, methods=None, params=None, current: float = 0.1, wind: float = 1
         if case in ("head-on", "crossing"):
             for dname, d in dist.items():
                 cases[f"{case}-{dname}"] = with_params(sc, {**(params or {}), **d})
-    enc = run_cases(cases, methods or ("modified-vortex",), out / "encounters", title="disturbance")
+    enc = run_cases(cases, methods or (DEFAULT_METHOD,), out / "encounters", title="disturbance")
     metrics["encounters"] = {case: {m: {"collision": r["collision"],
                                         "min_distance": min((p["min_distance"] for p in r["pairs"]),
                                                             default=math.nan),

@@ -32,7 +32,7 @@ from mmg_casadi.montecarlo.results import FAILURES, ResultsTable
 from mmg_casadi.montecarlo.sampling import parse_envs
 from mmg_casadi.montecarlo.stats import paired_comparison, wilson
 
-DEFAULT_METHODS = ("modified-vortex",)
+DEFAULT_METHODS = (registry.DEFAULT,)
 
 
 def parse_values(param: str, text) -> list:

@@ -1,4 +1,4 @@
-"""Tracking metrics (mmg_casadi.closed_loop.metrics)."""
+"""Tracking metrics (tests/trajectory_metrics.py, the check of the closed loop's exact CE/MCTE)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.closed_loop.metrics import (
+from trajectory_metrics import (
     TrackingMetrics,
     control_effort,
     mean_cross_track_error,

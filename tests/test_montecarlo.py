@@ -18,7 +18,8 @@ from mmg_casadi.closed_loop.state import initial_state
 from mmg_casadi.params import resolve
 from mmg_casadi.errors import InputError
 from mmg_casadi.montecarlo.batching import BatchTask, LocalExecutor, RayExecutor, plan_batches
-from mmg_casadi.montecarlo.execution import TIMING_COLUMNS, classify, run_batch, run_scenarios, sampled_scenario
+from mmg_casadi.closed_loop.outcome import run_outcome
+from mmg_casadi.montecarlo.execution import TIMING_COLUMNS, run_batch, run_scenarios, sampled_scenario
 from mmg_casadi.montecarlo.study import run_study
 from mmg_casadi.montecarlo.results import RUN_COLUMNS, ResultsTable
 from mmg_casadi.montecarlo.sampling import sample_scenario
@@ -187,6 +188,10 @@ def _final_state(layout, **own):
     return x
 
 
+def classify(model, x):
+    return run_outcome(model.layout, x, model.params)
+
+
 def test_classify_stalled_diverged_from_final_state():
     layout = Layout(methods=("none",))
     model = ClosedLoopModel(layout, resolve())
@@ -205,7 +210,7 @@ def test_classify_stalled_diverged_from_final_state():
 
 def _own_mcte_from_states(res):
     """Own-ship MCTE of a run_scenario trajectory with y_e re-evaluated by the step at every stored state."""
-    from mmg_casadi.closed_loop.metrics import tracking_metrics
+    from trajectory_metrics import tracking_metrics
     from mmg_casadi.closed_loop.problem import build_problem
     from mmg_casadi.closed_loop.simulation import compiled_step
     pr = build_problem(res.scenario)
@@ -234,7 +239,7 @@ def test_batch_ce_mcte_agree_with_run_scenario(reference_rows):
         reached = [s for s in res.metrics["ships"] if s["reached_goal"]]
         assert row["fleet_ce"] == pytest.approx(np.mean([s["ce"] for s in reached]), rel=1e-12)
         # check against the trajectory definition (trapezoid of |delta| and |y_e| up to the goal)
-        from mmg_casadi.closed_loop.metrics import tracking_metrics
+        from trajectory_metrics import tracking_metrics
         tr = res.trajectory
         ref = tracking_metrics(tr.t[:-1], tr.state("delta", 0)[:-1], tr.auxiliary("y_e", 0),
                                tr.state("status", 0)[1:] == 1, delta_max=math.radians(35.0))

@@ -69,8 +69,9 @@ from mmg_casadi.closed_loop.simulation import simulate, simulate_batch
 from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, Layout
 from mmg_casadi.closed_loop.step import AUX, build_closed_loop_step
 from mmg_casadi.errors import InputError, check_range
-from mmg_casadi.montecarlo.execution import classify
+from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.montecarlo.results import wilson_interval
+from mmg_casadi.params import PARAMETERS
 from mmg_casadi.scenarios.run import build_problem, run_scenario
 
 from .apf import HOLDOUT_SEED, sampled_scenario
@@ -134,7 +135,7 @@ class TuningConfig:
     """
 
     smooth: float = 10.0
-    dt: float = 0.25
+    dt: float = PARAMETERS["dt"].default
     max_steps: int = 300
     horizon_margin: float = 5.0
     w_mcte: float = 0.1
@@ -709,7 +710,8 @@ def evaluate(param_sets: dict, *, envs=(1, 2, 3, 4, 5), runs: int = 40, base_see
         XF, busy = simulate_batch(layout, np.column_stack(X0), np.column_stack(P))
         res = {}
         for a, name in enumerate(names):
-            rows = [classify(models[a * runs + r], XF[:, a * runs + r]) for r in range(runs)]
+            rows = [run_outcome(models[a * runs + r].layout, XF[:, a * runs + r], models[a * runs + r].params)
+                    for r in range(runs)]
             k = sum(r["success"] for r in rows)
             lo, hi = wilson_interval(int(k), int(runs))
             ok = [r for r in rows if r["success"]]

@@ -48,7 +48,9 @@ import numpy as np
 from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, Layout
 from mmg_casadi.closed_loop.step import AUX, build_closed_loop_step
 from mmg_casadi.closed_loop.compiled import compile_function
+from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.errors import InputError, check_range
+from mmg_casadi.params import PARAMETERS
 from mmg_casadi.scenarios.run import build_problem
 
 THETA = ("k_vor0", "r_safe")
@@ -102,7 +104,7 @@ class SafetyConfig:
     """
 
     smooth: float = 10.0
-    dt: float = 0.25
+    dt: float = PARAMETERS["dt"].default
     max_steps: int = 800
     horizon_margin: float = 10.0
     kappa: float = 4.0
@@ -304,11 +306,10 @@ def prepare_case(name: str, sc, config: SafetyConfig = SafetyConfig()) -> Safety
     config : SafetyConfig
         ``dt``, ``max_steps``, ``horizon_margin``, ``smooth``.
     """
-    from mmg_casadi.montecarlo.execution import classify
     from mmg_casadi.closed_loop.simulation import simulate_batch
     pr = build_problem(sc, {"k_vor0": PAPER[0], "r_safe": PAPER[1], "lam_sink": LAM_SINK})
     xf, _ = simulate_batch(pr.layout, pr.x0[:, None], pr.p[:, None])
-    row = classify(pr.model, xf[:, 0])
+    row = run_outcome(pr.layout, xf[:, 0], pr.params)
     t_own = row["time_to_goal"] if row["success"] else float(xf[0, 0])
     g = pr.model.values
     p = np.array(pr.p, float)

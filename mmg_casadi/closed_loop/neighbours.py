@@ -40,12 +40,13 @@ def dispatch_args(layout: Layout, g: GuidanceInputs) -> list:
     """
     spec_memory = tuple(g.memory)
     return [g.pos, g.vel, g.psi, g.speed, g.goal, g.nb_pos, g.nb_vel, g.nb_radius, g.active,
-            _memory_vector(spec_memory, g.memory), ca.vertcat(*[g.P[k] for k in _method_scalars(layout)])]
+            _memory_vector(spec_memory, g.memory), g.service_rpm,
+            ca.vertcat(*[g.P[k] for k in _method_scalars(layout)])]
 
 
 @functools.lru_cache(maxsize=None)
 def within_range(layout: Layout, method: str, m: int) -> ca.Function:
-    """Never-inlined Function ``(k, pos, vel, psi, speed, goal, nb_pos, nb_vel, nb_radius, active, memory, P)``
+    """Never-inlined Function ``(k, pos, vel, psi, speed, goal, nb_pos, nb_vel, nb_radius, active, memory, service_rpm, P)``
     → the method's command as one column (:func:`~mmg_casadi.guidance.methods.command_vector`), evaluating the method on the ``k`` active neighbours only (gathered in their
     order into 1, 2 or 4 slots, the unused slots inactive) or on all ``m`` when more are active; with none
     active and no walls it returns (1, 0) without evaluating the method (the step does not read it). Exact only
@@ -65,8 +66,9 @@ def within_range(layout: Layout, method: str, m: int) -> ca.Function:
     names = _method_scalars(layout)
     sym = [ca.SX.sym("pos", 2), ca.SX.sym("vel", 2), ca.SX.sym("psi"), ca.SX.sym("speed"), ca.SX.sym("goal", 2),
            ca.SX.sym("nb_pos", 2, m), ca.SX.sym("nb_vel", 2, m), ca.SX.sym("nb_radius", 1, m),
-           ca.SX.sym("active", 1, m), ca.SX.sym("memory", len(spec.memory)), ca.SX.sym("P", len(names))]
-    pos, vel, psi, speed, goal, nb_pos, nb_vel, nb_rad, active, mem, pv = sym
+           ca.SX.sym("active", 1, m), ca.SX.sym("memory", len(spec.memory)), ca.SX.sym("service_rpm"),
+           ca.SX.sym("P", len(names))]
+    pos, vel, psi, speed, goal, nb_pos, nb_vel, nb_rad, active, mem, rpm, pv = sym
     P = {k: pv[n] for n, k in enumerate(names)}
 
     def branch(slots):
@@ -87,7 +89,7 @@ def within_range(layout: Layout, method: str, m: int) -> ca.Function:
             g_act = ca.horzcat(*[cq[3] for cq in cols])
         g = GuidanceInputs(pos=pos, vel=vel, psi=psi, speed=speed, goal=goal, nb_pos=g_pos, nb_vel=g_vel,
                            nb_radius=g_rad, active=g_act, P=P, layout=layout,
-                           memory={k: mem[j] for j, k in enumerate(spec.memory)})
+                           memory={k: mem[j] for j, k in enumerate(spec.memory)}, service_rpm=rpm)
         return ca.Function(f"{method.replace('-', '')}_{layout.key()}_m{m}_s{min(slots, m)}", sym,
                            [command_vector(spec, spec.builder(g))], {"cse": True})
 

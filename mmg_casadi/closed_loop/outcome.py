@@ -17,6 +17,9 @@ from mmg_casadi.guidance import hazards
 S_ = {name: i for i, name in enumerate(SHIP_STATE)}
 """Column of each common row in a ship's row (:data:`SHIP_STATE`; the memory rows follow them)."""
 
+RUN_FAILURES = ("collision", "timeout", "diverged", "stalled")
+"""How a run fails (:func:`run_outcome`); ``""`` when it succeeds."""
+
 OUTCOMES = ("reached", "diverged", "stalled", "timeout")
 """A ship's outcome: reached its goal, left the model envelope, made no progress (``stall_window``), or none."""
 
@@ -149,3 +152,68 @@ def ship_outcomes(layout: Layout, x_final, params: dict) -> list[dict]:
             "reactive_time": float(row[S_["reactive_time"]]),
         })
     return out
+
+
+def run_outcome(layout: Layout, x_final, params: dict) -> dict:
+    """The run-level verdict of the own ship (ship 0) and the fleet from the final scenario state: whether the run
+    succeeded, how it failed (:data:`RUN_FAILURES`), with whom and when, and the own and fleet metrics.
+
+    The own ship succeeds when it reached its goal without a collision (with a ship or any hazard); the fleet when
+    every ship did. A collision wins over every other failure; a collision partner is labelled ``0-j`` for ship
+    ``j``, ``0-obs<k>`` for obstacle ``k`` and ``0-wall<k>`` for wall segment ``k``.
+
+    Parameters
+    ----------
+    layout : Layout
+        The run's closed-loop layout.
+    x_final : array (nx,)
+        Final scenario state ``[t, ship_0, ship_1, ...]``.
+    params : dict
+        The resolved parameter set (:func:`ship_outcomes` reads it).
+
+    Returns
+    -------
+    dict
+        ``success``, ``fleet_success``, ``failure`` (``""`` or one of :data:`RUN_FAILURES`), ``failure_pair``,
+        ``failure_time``, the own ship's ``time_to_goal``, ``ce``, ``mcte`` and ``min_distance``, the fleet means
+        over the ships that reached their goals, ``n_ships`` and ``n_obstacles``.
+    """
+    x = np.asarray(x_final, float).ravel()
+    N = layout.n_ships
+    ships = ship_outcomes(layout, x, params)
+    own = ships[0]
+    reached = np.array([s["status"] == "reached" for s in ships])
+    collided = np.array([s["collision_time"] is not None for s in ships])
+    if collided[0]:
+        j, kind = own["collision_with"], own["collision_kind"]
+        label = {"ship": str(j), "obstacle": f"obs{j - N}", "wall": f"wall{j - N - layout.n_obstacles}"}[kind]
+        failure, pair, failure_time = "collision", f"0-{label}", own["collision_time"]
+    elif reached[0]:
+        failure, pair, failure_time = "", "", math.nan
+    elif own["status"] == "stalled":
+        failure, pair, failure_time = "stalled", "", own["stalled_time"]
+    elif own["status"] == "diverged":
+        failure, pair, failure_time = "diverged", "", math.nan
+    else:
+        failure, pair, failure_time = "timeout", "", float(x[0])
+
+    def fleet_mean(key):
+        v = [s[key] for s, r in zip(ships, reached) if r]
+        return float(np.mean(v)) if v else math.nan
+
+    return {
+        "success": bool(reached[0] and not collided[0]),
+        "fleet_success": bool(np.all(reached) and not np.any(collided)),
+        "failure": failure,
+        "failure_pair": pair,
+        "failure_time": failure_time,
+        "time_to_goal": own["time_to_goal"] if reached[0] else math.nan,
+        "ce": own["ce"],
+        "mcte": own["mcte"],
+        "fleet_time_to_goal": fleet_mean("time_to_goal"),
+        "fleet_ce": fleet_mean("ce"),
+        "fleet_mcte": fleet_mean("mcte"),
+        "min_distance": math.nan if own["min_distance"] is None else own["min_distance"],
+        "n_ships": N,
+        "n_obstacles": layout.n_obstacles,
+    }

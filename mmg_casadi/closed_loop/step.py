@@ -207,7 +207,8 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         speed = ca.norm_2(vel[i]) if layout.disturbed else ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2)
         inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal,
                                 nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=active, P=P,
-                                layout=layout, memory={k: Xi[S_[k]] for k in spec.memory})
+                                layout=layout, memory={k: Xi[S_[k]] for k in spec.memory},
+                                service_rpm=Pi["n_rpm"])
         if sparse and M > 1:
             command = command_from_vector(spec, within_range(layout, method, M)(ca.sum2(active),
                                                                                *dispatch_args(layout, inputs)))

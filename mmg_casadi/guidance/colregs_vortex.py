@@ -60,7 +60,7 @@ from dataclasses import dataclass, fields as dc_fields
 
 import casadi as ca
 
-from mmg_casadi.params import check_fields
+from mmg_casadi.params import PARAMETERS, check_fields
 from mmg_casadi.params import field as param_field
 from mmg_casadi.guidance.fields import R_MIN, _col2, _matrix, _row, modified_vortex_terms, vortex
 from mmg_casadi.guidance.ilos import wrap_angle
@@ -296,8 +296,9 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
 
 def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink, k_vor0, r_safe, r_tol,
                    gamma_max, theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear,
-                   v_ship_min, r_guard, lam_guard, d_att_floor, r_cq=0.0, d_cq=3.0, dpsi_cq=math.pi / 4,
-                   n_candidates=80):
+                   v_ship_min, r_guard, lam_guard, d_att_floor, r_cq=0.0, d_cq=PARAMETERS["cv_d_cq"].default,
+                   dpsi_cq=PARAMETERS["cv_dpsi_cq_deg"].default * math.pi / 180.0,
+                   n_candidates=PARAMETERS["vo_candidates"].default):
     """Desired-heading vector of ``colregs-vortex`` (2×1; its direction is the desired heading).
 
     Sink at the goal (strength capped while avoiding), the modified vortex at every active give-way ship, the

@@ -60,6 +60,8 @@ class GuidanceInputs:
         The closed loop's shape (structural parameters such as the velocity obstacle's candidates and cone).
     memory : dict
         The method's memory rows (:attr:`Method.memory`) at the start of the step, by name.
+    service_rpm : SX, optional
+        The ship's service propeller speed (rev/min), the speed it sails at when no method commands another.
     """
 
     pos: object
@@ -74,6 +76,7 @@ class GuidanceInputs:
     P: dict
     layout: object
     memory: dict = dataclasses.field(default_factory=dict)
+    service_rpm: object = None
 
 
 @dataclass(frozen=True)
@@ -227,16 +230,55 @@ METHODS: dict[str, Method] = {m.name: m for m in (
 """Every method, by name (:func:`register` adds one)."""
 
 NAMES: tuple[str, ...] = tuple(METHODS)
-"""Method names in registry order."""
+"""Method names in registry order (the shipped methods)."""
 
 AVOIDING: tuple[str, ...] = tuple(n for n, m in METHODS.items() if m.builder is not None)
-"""Methods that avoid collisions (all but ``"none"``)."""
+"""Shipped methods that avoid collisions (all but ``"none"``)."""
 
 PAPER_STATISTICS: tuple[str, ...] = ("modified-vortex", "inverse-square", "velocity-obstacle")
+"""Methods compared by the paper's statistical analysis."""
 
 PAPER: tuple[str, ...] = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle")
 """The methods of the paper (the studies' defaults compare these)."""
-"""Methods compared by the paper's statistical analysis."""
+
+DEFAULT = "modified-vortex"
+"""The method of a scenario that names none: the paper's proposed modified sink-vortex field."""
+
+
+def register(method: Method) -> Method:
+    """Add ``method`` to :data:`METHODS` under a new name (the shipped ones cannot be replaced).
+
+    A user's method is its builder and this one call; the closed loop, the scenario files and the studies then
+    accept its name.
+
+    Parameters
+    ----------
+    method : Method
+        The method to add.
+
+    Returns
+    -------
+    Method
+        ``method``.
+    """
+    if method.name in METHODS:
+        raise InputError("method.name", f"a name not yet registered (not one of: {', '.join(METHODS)})",
+                         method.name)
+    METHODS[method.name] = method
+    return method
+
+
+def unregister(name: str) -> None:
+    """Remove a method added by :func:`register` (the shipped methods stay).
+
+    Parameters
+    ----------
+    name : str
+        Name of a method added by :func:`register`.
+    """
+    if name in NAMES:
+        raise InputError("method", f"a method added by register (not one of: {', '.join(NAMES)})", name)
+    METHODS.pop(name, None)
 
 
 def get(name, field: str = "method") -> Method:

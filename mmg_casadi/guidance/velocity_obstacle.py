@@ -44,6 +44,7 @@ import numpy as np
 from mmg_casadi.errors import ParameterError, check_range
 from mmg_casadi.guidance.fields import R_MIN, _col2, _matrix, _row
 from mmg_casadi.guidance.ilos import wrap_angle
+from mmg_casadi.params import PARAMETERS
 
 CONES = ("huang", "wide")
 TIE_EPS = 1e-6
@@ -71,9 +72,9 @@ class VelocityObstacleParams:
         Cone formula, ``"huang"`` or ``"wide"``.
     """
 
-    collision_distance: float = 2.0
-    n_candidates: int = 80
-    cone: str = "huang"
+    collision_distance: float = PARAMETERS["collision_distance"].default
+    n_candidates: int = PARAMETERS["vo_candidates"].default
+    cone: str = PARAMETERS["vo_cone"].default
 
     def __post_init__(self):
         check_range("collision_distance", self.collision_distance, 0.0, None, low_open=True, unit="L")
@@ -96,7 +97,7 @@ def _half_angle(d, collision_distance, cone):
 
 
 def velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance,
-                            n_candidates, cone="huang", current_heading=None):
+                            n_candidates, cone=PARAMETERS["vo_cone"].default, current_heading=None):
     """Candidate headings and their feasibility, penetration and goal cost.
 
     Returns a dict: ``headings`` (1×n, θ_j), ``forbidden`` (M×n, 1 where neighbour i forbids candidate j),
@@ -184,7 +185,7 @@ def _candidate_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, collision
 
 
 def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance, n_candidates,
-                      cone="huang", current_heading=None):
+                      cone=PARAMETERS["vo_cone"].default, current_heading=None):
     """Desired heading ψ_d (rad, (−π, π]) chosen by the constant-speed linear velocity obstacle.
 
     The feasible candidate with the smallest goal cost wins (strict <, so the first minimum in candidate order
@@ -400,7 +401,7 @@ def _direct_function(m, n, cone, with_heading):
 
 
 def _velocity_obstacle_reference(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance,
-                                 n_candidates, cone="huang", current_heading=None):
+                                 n_candidates, cone=PARAMETERS["vo_cone"].default, current_heading=None):
     """The direct implementation (every candidate against every neighbour, trigonometric tests).
 
     Used by :func:`velocity_obstacle` for the fallback and the degenerate cases; see it for the semantics.
@@ -422,7 +423,8 @@ def _velocity_obstacle_reference(own_pos, own_speed, goal, nb_pos, nb_vel, activ
     return wrap_angle(ca.if_else(best_c < _BIG / 2, best_th, fb_th))
 
 
-def heading_feasible(own_pos, own_speed, heading, nb_pos, nb_vel, active, *, collision_distance, cone="huang"):
+def heading_feasible(own_pos, own_speed, heading, nb_pos, nb_vel, active, *, collision_distance,
+                     cone=PARAMETERS["vo_cone"].default):
     """1 if the velocity ``own_speed`` (cos ψ, sin ψ) at ``heading`` ψ lies outside the cone of every active
     neighbour, else 0 (same cone test as :func:`velocity_obstacle_terms`: angle(w, l) < α and w ≠ 0).
 
@@ -475,7 +477,8 @@ def heading_feasible(own_pos, own_speed, heading, nb_pos, nb_vel, active, *, col
     return ok
 
 
-def hold_heading(fresh, held, own_pos, own_speed, nb_pos, nb_vel, active, *, collision_distance, cone="huang"):
+def hold_heading(fresh, held, own_pos, own_speed, nb_pos, nb_vel, active, *, collision_distance,
+                 cone=PARAMETERS["vo_cone"].default):
     """The heading the ship steers with the paper's "keep the chosen velocity" behaviour.
 
     ``held`` (the remembered heading) while some neighbour is active and ``held`` is feasible

@@ -7,7 +7,7 @@ initial states and parameter vectors as columns and rolls them out together with
 :func:`~mmg_casadi.closed_loop.simulation.simulate_batch`: *one* compiled step per (environment, method) (all its runs
 share one :class:`~mmg_casadi.closed_loop.layout.Layout`), ``map`` over the scenarios and ``mapaccum`` over chunks of
 steps until every scenario has finished. Each run is classified from its *final* state only
-(:func:`classify`): the closed-loop state carries goal time, CE/MCTE integrals, closest approach and the
+(:func:`~mmg_casadi.closed_loop.outcome.run_outcome`): the closed-loop state carries goal time, CE/MCTE integrals, closest approach and the
 first collision of every ship. Every run becomes one row of :data:`~mmg_casadi.montecarlo.results.RUN_COLUMNS`.
 
 Outcome of a run (own ship = agent 0, judged from the final state):
@@ -52,7 +52,8 @@ import numpy as np
 
 from mmg_casadi.closed_loop.simulation import compiled_guidance, simulate_batch, simulate_batch_history
 from mmg_casadi.closed_loop.layout import Layout
-from mmg_casadi.closed_loop.problem import build_problem, ClosedLoopModel
+from mmg_casadi.closed_loop.outcome import run_outcome
+from mmg_casadi.closed_loop.problem import ClosedLoopModel, build_problem
 from mmg_casadi.colregs.compliance import own_ship_compliance
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
 from mmg_casadi.montecarlo.failures import failure_mechanism, turn_time_90, unavoidable_at_start
@@ -126,63 +127,6 @@ def layout_for(environment: int, method: str, params: dict | None = None) -> Lay
 
 
 # ------------------------------------------------------------------------------------------ classification
-
-def classify(model: ClosedLoopModel, x_final) -> dict:
-    """Outcome and metrics of one run from its final scenario state (see the module docstring).
-
-    Parameters
-    ----------
-    model : ClosedLoopModel
-        The run's closed loop (layout and resolved parameters).
-    x_final : array (nx,)
-        Final scenario state ``[t, ship_0, ship_1, ...]``.
-
-    Returns
-    -------
-    dict
-        The non-key columns of :data:`~mmg_casadi.montecarlo.results.RUN_COLUMNS` except ``seed`` and
-        ``guidance_call_us``.
-    """
-    x = np.asarray(x_final, float).ravel()
-    layout = model.layout
-    N = layout.n_ships
-    ships = model.outcomes(x)
-    own = ships[0]
-    reached = np.array([s["status"] == "reached" for s in ships])
-    collided = np.array([s["collision_time"] is not None for s in ships])
-    if collided[0]:
-        j = own["collision_with"]
-        failure, pair, failure_time = "collision", (f"0-{j}" if j < N else f"0-obs{j - N}"), own["collision_time"]
-    elif reached[0]:
-        failure, pair, failure_time = "", "", math.nan
-    elif own["status"] == "stalled":
-        failure, pair, failure_time = "stalled", "", own["stalled_time"]
-    elif own["status"] == "diverged":
-        failure, pair, failure_time = "diverged", "", math.nan
-    else:
-        failure, pair, failure_time = "timeout", "", float(x[0])
-
-    def fleet_mean(key):
-        v = [s[key] for s, r in zip(ships, reached) if r]
-        return float(np.mean(v)) if v else math.nan
-
-    return {
-        "success": bool(reached[0] and not collided[0]),
-        "fleet_success": bool(np.all(reached) and not np.any(collided)),
-        "failure": failure,
-        "failure_pair": pair,
-        "failure_time": failure_time,
-        "time_to_goal": own["time_to_goal"] if reached[0] else math.nan,
-        "ce": own["ce"],
-        "mcte": own["mcte"],
-        "fleet_time_to_goal": fleet_mean("time_to_goal"),
-        "fleet_ce": fleet_mean("ce"),
-        "fleet_mcte": fleet_mean("mcte"),
-        "min_distance": math.nan if own["min_distance"] is None else own["min_distance"],
-        "n_ships": N,
-        "n_obstacles": layout.n_obstacles,
-    }
-
 
 # ------------------------------------------------------------------------------------------ batch rollout
 
@@ -261,7 +205,7 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
         Decimated history (:meth:`mmg_casadi.closed_loop.simulation.BatchHistory.column`).
     """
     P = model.params
-    row = classify(model, x_final)
+    row = run_outcome(model.layout, x_final, model.params)
     own = model.outcomes(x_final)[0]
     goals = np.array([s.waypoints[-1] for s in scenario.ships], float)
     obstacles = np.array([o.position for o in scenario.obstacles], float).reshape(-1, 2)
@@ -295,7 +239,7 @@ def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT
 
     Scenarios with the same :class:`Layout` are rolled out as one batch (one compiled step, ``map`` over the
     scenarios, ``mapaccum`` over chunks of ``chunk`` steps). Returns one dict per scenario, in order, with the
-    columns of :func:`classify` plus ``guidance_call_us`` (``nan`` unless ``time_guidance_calls``) and, with
+    columns of :func:`~mmg_casadi.closed_loop.outcome.run_outcome` plus ``guidance_call_us`` (``nan`` unless ``time_guidance_calls``) and, with
     ``explain``, the columns of :func:`explain_run` (from a history kept every :data:`HISTORY_EVERY` steps).
 
     Parameters
@@ -326,7 +270,7 @@ def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT
             XF, _busy = simulate_batch(layout, X0, P, chunk=chunk)
         us = time_guidance(layout, np.hstack([X0, XF]), np.hstack([P, P])) if time_guidance_calls else math.nan
         for col, i in enumerate(idx):
-            row = classify(problems[i].model, XF[:, col])
+            row = run_outcome(problems[i].layout, XF[:, col], problems[i].params)
             row["guidance_call_us"] = us
             if explain:
                 row.update(explain_run(scenarios[i], problems[i].model, XF[:, col], *hist.column(col)))

@@ -44,17 +44,14 @@ from functools import lru_cache
 import numpy as np
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.params import PARAMETERS
 
 MECHANISMS: tuple[str, ...] = ("started-too-close", "obstacle-near-goal", "near-goal", "ship-ship", "obstacle",
                                "stalled", "timeout", "diverged")
 """Failure mechanisms, in the order they are checked (see the module notes)."""
 
-NEAR_GOAL_DISTANCE = 10.0
-"""Default distance (L) from its goal within which a ship counts as "near its goal" at a collision."""
-
-
 @lru_cache(maxsize=8)
-def turn_time_90(rudder_deg: float = 35.0, speed: float = 1.0) -> float:
+def turn_time_90(rudder_deg: float = PARAMETERS["delta_max_deg"].default, speed: float = 1.0) -> float:
     """Time (L/U) our KCS needs to change heading by 90° with ``rudder_deg`` from a straight course at ``speed``.
 
     From :func:`mmg_casadi.vessel.maneuvers.turning_circle` (the steering gear's delay included), linearly interpolated.
@@ -92,7 +89,7 @@ def _hard_turn(rudder_deg: float, speed: float) -> tuple[np.ndarray, np.ndarray]
 
 
 def unavoidable_at_start(own_start, own_heading: float, own_speed: float, other_start, other_velocity, *,
-                         collision_distance: float, rudder_deg: float = 35.0) -> bool:
+                         collision_distance: float, rudder_deg: float = PARAMETERS["delta_max_deg"].default) -> bool:
     """Whether the own ship alone could not avoid the other agent from ``t = 0``.
 
     Three manoeuvres of the own ship from its initial state are tried: holding course and speed, and full
@@ -141,7 +138,8 @@ def unavoidable_at_start(own_start, own_heading: float, own_speed: float, other_
 
 def failure_mechanism(failure: str, *, collision_time=None, collision_with=None, goals=(), obstacles=(),
                       positions_at_collision=None, turn_time: float,
-                      near_goal_distance: float = NEAR_GOAL_DISTANCE, unavoidable: bool = False) -> str:
+                      near_goal_distance: float = PARAMETERS["near_goal_distance"].default,
+                      unavoidable: bool = False) -> str:
     """The mechanism (:data:`MECHANISMS`, ``""`` on success) of one run of the own ship (ship 0).
 
     Parameters
@@ -161,7 +159,8 @@ def failure_mechanism(failure: str, *, collision_time=None, collision_with=None,
     turn_time : float
         Time to turn 90° (:func:`turn_time_90`).
     near_goal_distance : float
-        Distance (L) from its goal within which a ship is "near its goal".
+        Distance (L) from its goal within which a ship is "near its goal" (default: the table's
+        ``near_goal_distance``).
     unavoidable : bool
         The agent it hit could not be avoided from the start (:func:`unavoidable_at_start`).
 

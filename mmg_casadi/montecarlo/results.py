@@ -16,7 +16,9 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from mmg_casadi.closed_loop.outcome import RUN_FAILURES
 from mmg_casadi.errors import InputError
+from mmg_casadi.montecarlo import failures as failure_mechanisms
 
 RUN_COLUMNS: tuple[str, ...] = (
     "environment", "method", "run", "seed", "success", "fleet_success", "failure", "failure_pair",
@@ -31,14 +33,13 @@ RESULTS_VERSION = 2
 """Version of :data:`RUN_COLUMNS`: 2 added ``failure_mechanism``, ``colregs_compliant`` and
 ``colregs_encounters``; a table of another version is refused, never misread."""
 
-MECHANISMS: tuple[str, ...] = ("started-too-close", "obstacle-near-goal", "near-goal", "ship-ship", "obstacle",
-                               "stalled", "timeout", "diverged")
+MECHANISMS: tuple[str, ...] = failure_mechanisms.MECHANISMS
 """Allowed non-empty values of ``failure_mechanism`` (:data:`mmg_casadi.montecarlo.failures.MECHANISMS`)."""
 
 KEY_COLUMNS: tuple[str, str, str] = ("environment", "method", "run")
 """Columns that identify a run; a key is stored at most once."""
 
-FAILURES: tuple[str, ...] = ("", "collision", "timeout", "diverged", "stalled")
+FAILURES: tuple[str, ...] = ("", *RUN_FAILURES)
 """Allowed values of the ``failure`` column (``""`` for a successful run)."""
 
 _INT_COLUMNS = frozenset({"environment", "run", "seed", "n_ships", "n_obstacles", "colregs_encounters"})

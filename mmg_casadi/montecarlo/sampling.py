@@ -31,6 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
+from mmg_casadi.params import PARAMETERS
 
 ENVIRONMENTS: dict[int, tuple[int, int]] = {1: (1, 2), 2: (2, 3), 3: (2, 5), 4: (3, 7), 5: (4, 9)}
 """Environment number -> (static obstacles, dynamic ships besides the own ship), from the paper's table."""
@@ -196,8 +198,9 @@ class SampledScenario:
             "obstacle_radius": float(self.obstacle_radius),
         }
 
-    def to_scenario_dict(self, method: str = "modified-vortex", dt: float = 0.25, t_max: float = 300.0,
-                         r_safe: float = 15.0, collision_distance: float = 2.0) -> dict:
+    def to_scenario_dict(self, method: str = DEFAULT_METHOD, dt: float = PARAMETERS["dt"].default,
+                         t_max: float = PARAMETERS["t_max"].default, r_safe: float = PARAMETERS["r_safe"].default,
+                         collision_distance: float = PARAMETERS["collision_distance"].default) -> dict:
         """The scenario in the shape of a TOML scenario file, so a run can be replayed on its own.
 
         Ships are named ``agent0`` (own ship), ``agent1``, ...; headings are written in degrees; every ship

@@ -8,7 +8,7 @@ simulated by the compiled closed loop and reduced to one row of :data:`~mmg_casa
   into batches (tasks) of ``batch_size`` runs of one (environment, method), interleaved over the cells.
 * **Sampler / batch** – :func:`~mmg_casadi.montecarlo.execution.run_batch` samples the batch's scenarios and rolls
   them out together, one compiled step per (environment, method); each run is classified from its *final* state
-  only (:func:`~mmg_casadi.montecarlo.execution.classify`; the outcome of a run is defined in
+  only (:func:`~mmg_casadi.closed_loop.outcome.run_outcome`; the outcome of a run is defined in
   :mod:`mmg_casadi.montecarlo.execution`).
 * **Executors** – :class:`~mmg_casadi.montecarlo.batching.LocalExecutor` (a process pool, ``fork``) or
   :class:`~mmg_casadi.montecarlo.batching.RayExecutor` (a Ray cluster) run the batches and yield their rows as they

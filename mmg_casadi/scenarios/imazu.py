@@ -35,6 +35,7 @@ from matplotlib.figure import Figure
 from mmg_casadi.errors import InputError
 from mmg_casadi.plotting import COLORS, draw_goal, draw_path, marine_axes
 from mmg_casadi.guidance.methods import NAMES as METHODS
+from mmg_casadi.scenarios.run import run_scenario
 from mmg_casadi.scenarios.scenario import scenario_from_dict
 
 MEET_DISTANCE = 40.0  #: L, own ship start to the common meeting point
@@ -141,14 +142,13 @@ def run_imazu(method: str, targets: str = "hold", *, cases=tuple(CASES), params:
     >>> rows[0]["case"], rows[0]["safe"], rows[0]["min_distance"] > 2.0
     (2, True, True)
     """
-    from mmg_casadi.scenarios.run import run_scenario
     out = []
     for k in cases:
         sc = scenario_from_dict(imazu_case(k, method=method, targets=targets), source=f"imazu{k}")
         res = run_scenario(sc, params)
         own = res.metrics["ships"][0]
         dmin = float(np.min(res.own_distance()))
-        collided = dmin < res.params["collision_distance"]
+        collided = own["collided"]  # the closed loop's judgement, as every runner's
         out.append({"case": int(k), "safe": bool(own["reached_goal"] and not collided),
                     "reached_goal": bool(own["reached_goal"]), "min_distance": dmin, "collided": bool(collided),
                     "result": res})

@@ -16,6 +16,7 @@ import tomllib
 from pathlib import Path
 
 from mmg_casadi.errors import ScenarioError
+from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
 from mmg_casadi.scenarios.geodesy import LocalPlane
 from mmg_casadi.scenarios.maritime_export import DEFAULT_REFERENCE, dump_traffic_situation
 from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
@@ -162,7 +163,7 @@ def parse_reference(text):
     return lat, lon
 
 
-def convert_file(src, out, *, method: str = "modified-vortex", target_method: str = "none",
+def convert_file(src, out, *, method: str = DEFAULT_METHOD, target_method: str = "none",
                  length_scale: str = "kcs", reference=None) -> dict:
     """Convert ``src`` (``.json`` traffic situation or ``.toml`` scenario) into ``out`` (the other format).
 

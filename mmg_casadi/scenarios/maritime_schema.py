@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from mmg_casadi.errors import ScenarioError
+from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
 from mmg_casadi.guidance.methods import NAMES as METHODS
 from mmg_casadi.scenarios.geodesy import LocalPlane, wrap_360
 from mmg_casadi.scenarios.scenario import SPEED_RANGE, Scenario, scenario_from_dict
@@ -199,7 +200,7 @@ def _extend(start, path, heading_rad: float, needed: float):
     return list(path) + [(float(end[0]), float(end[1]))]
 
 
-def traffic_situation_to_scenario(data: dict, *, method: str = "modified-vortex", target_method: str = "none",
+def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, target_method: str = "none",
                                   length_scale: str = "kcs", extend_past: float = EXTEND_PAST,
                                   source: str = "<json>") -> tuple[Scenario, LocalPlane, float]:
     """A :class:`Scenario` from a maritime-schema traffic situation (a parsed JSON object).

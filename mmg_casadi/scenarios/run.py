@@ -6,6 +6,7 @@
      "ships": [{"name", "method", "status": "reached"|"diverged"|"stalled"|"timeout",
                 "reached_goal": bool, "time_to_goal": float|null, "ce": float, "mcte": float,
                 "collided": bool, "collision_time": float|null, "collision_with": str|null,
+                "collision_kind": "ship"|"obstacle"|"wall"|null,
                 "min_distance": float, "stalled_at": [x, y]|null, "reactive_time": float}],
      "pairs": [{"a", "b", "min_distance", "t_min", "encounter", "compliant",
                 "encounter_b", "compliant_b", "t_enter", "rules"}]}
@@ -13,8 +14,8 @@
 ``encounter``/``compliant`` are from ship ``a``'s side (``encounter_b``/``compliant_b`` from ``b``'s);
 static obstacles appear as ``b = "obstacle<k>"`` with encounter ``"static"`` (no ``rules``). ``rules`` is the
 rule-by-rule COLREG scoring of a ship pair under the chosen profile (:func:`mmg_casadi.colregs.score.score_pair`).
-Outcome, CE and MCTE come from :meth:`mmg_casadi.closed_loop.problem.ClosedLoopModel.outcomes` (``ce``/``mcte`` are null
-for a diverged ship).
+Outcome, CE, MCTE and collisions (with a ship or any hazard, reported by kind) come from the closed loop's one
+judgement, :func:`mmg_casadi.closed_loop.outcome.ship_outcomes` (``ce``/``mcte`` are null for a diverged ship).
 """
 
 from __future__ import annotations
@@ -23,14 +24,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
+from mmg_casadi.closed_loop.outcome import ship_outcomes
+from mmg_casadi.closed_loop.problem import build_problem
+from mmg_casadi.closed_loop.simulation import Trajectory, simulate
 from mmg_casadi.colregs.assess import assess_pair
 from mmg_casadi.colregs.classify import get_profile
-from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.errors import InputError
 from mmg_casadi.io import json_safe, write_json
 from mmg_casadi.scenarios.scenario import Scenario, load_scenario, with_method
-from mmg_casadi.closed_loop.simulation import Trajectory, simulate
 
 
 @dataclass
@@ -78,11 +81,14 @@ class ScenarioResult:
         plot_paths(self, ax)
         return ax.figure
 
-    def to_frame(self):
+    def to_pandas(self):
         """The per-ship metrics as a pandas DataFrame, one row per ship (index: ship name)."""
-        import pandas as pd
         rows = [{k: v for k, v in s.items() if k != "stalled_at"} for s in self.metrics["ships"]]
         return pd.DataFrame(rows).set_index("name")
+
+    def to_frame(self):
+        """Alias of :meth:`to_pandas` (the name of 0.2; kept for one release)."""
+        return self.to_pandas()
 
     def save(self, out, *, tracking: bool = False) -> Path:
         """Write the files ``simulate`` writes (``trajectory.npz``, ``trajectory.csv``, ``scenario.png``,
@@ -211,18 +217,17 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
         COLREG threshold profile or its name (:data:`mmg_casadi.colregs.classify.PROFILES`; default: the paper
         laboratory's).
     """
-    from mmg_casadi.closed_loop.problem import ClosedLoopModel
     profile = get_profile(profile)
     g = {k: params[k] for k in ("r_safe", "collision_distance")}
     names = [s.name for s in sc.ships]
     N = len(names)
     S = len(sc.obstacles)
-    agent_names = names + [f"obstacle{k}" for k in range(S)]
+    agent_names = names + [f"obstacle{k}" for k in range(S)] + [f"wall{k}" for k in range(traj.layout.n_walls)]
     mask = traj.sailing_mask()
     t_end = float(traj.t[-1])
     final = np.concatenate([[t_end], traj.final.ravel()])
     ships = []
-    for i, (s, o) in enumerate(zip(sc.ships, ClosedLoopModel(traj.layout, params).outcomes(final))):
+    for i, (s, o) in enumerate(zip(sc.ships, ship_outcomes(traj.layout, final, params))):
         ships.append({
             "name": s.name,
             "method": traj.layout.methods[i],
@@ -234,6 +239,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
             "collided": o["collision_time"] is not None,
             "collision_time": o["collision_time"],
             "collision_with": None if o["collision_with"] is None else agent_names[o["collision_with"]],
+            "collision_kind": o["collision_kind"],
             "min_distance": o["min_distance"],
             "stalled_at": None if o["stalled_at"] is None else list(o["stalled_at"]),
             "reactive_time": o["reactive_time"],
@@ -262,7 +268,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
             pairs.append({"a": names[i], "b": f"obstacle{k}", "min_distance": float(d[kmin]),
                           "t_min": float(traj.t[kmin]), "encounter": "static" if d[kmin] <= g["r_safe"] else "none",
                           "compliant": None, "encounter_b": None, "compliant_b": None, "t_enter": None})
-    collision = any(p["min_distance"] < g["collision_distance"] for p in pairs)
+    collision = any(s["collided"] for s in ships)  # the closed loop's own judgement (ships and every hazard)
     metrics = {"method": sc.settings.method, "collision": bool(collision), "t_end": t_end,
                "params": dict(params), "ships": ships, "pairs": pairs}
     return ScenarioResult(sc, traj, json_safe(metrics), labels)

@@ -19,6 +19,7 @@ times non-dimensional (L/U). A scenario file looks like::
     waypoints = [[50.0, 0.0]]
     # method = "none"            # optional per-ship override of settings.method
     # stays = false              # optional: after reaching its goal the ship stays as an obstacle
+    # vessel = "kcs"             # optional: the ship's hull (mmg-casadi vessels; default the table's 'vessel')
     [[obstacles]]
     position = [25.0, 0.0]
     radius = 0.5
@@ -56,6 +57,7 @@ from pathlib import Path
 
 import tomli_w
 
+from mmg_casadi.vessel.library import VESSELS
 from mmg_casadi.guidance import methods
 from mmg_casadi.errors import ParameterError, ScenarioError, check_range
 from mmg_casadi.params import PARAMETERS, check_value, resolve
@@ -65,7 +67,7 @@ SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_toleranc
 PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
 """Table parameters kept in :attr:`Settings.params`."""
 SETTINGS_KEYS = ("method",) + tuple(PARAMETERS)
-SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays")
+SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays", "vessel")
 OBSTACLE_KEYS = ("position", "radius")
 WALL_KEYS = ("points",)
 TOP_KEYS = ("settings", "ships", "obstacles", "walls", "environment")
@@ -176,6 +178,8 @@ class ShipSpec:
         Collision-avoidance method of this ship (default: :attr:`Settings.method`).
     stays : bool, optional
         Whether the ship stays at its goal as an obstacle after reaching it.
+    vessel : str or None, optional
+        The ship's hull (:data:`mmg_casadi.vessel.library.VESSELS`; default: the table's ``vessel``).
 
     Examples
     --------
@@ -191,6 +195,7 @@ class ShipSpec:
     waypoints: tuple[tuple[float, float], ...]
     method: str | None = None
     stays: bool = False
+    vessel: str | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "start", _as_point(self.start))
@@ -423,8 +428,8 @@ def _settings(d: dict) -> Settings:
     if "settings" not in d:
         raise ScenarioError("settings", "a [settings] table (required)")
     s = _table(d["settings"], "settings", SETTINGS_KEYS)
-    method = _string(_required(s, "method", "settings", f"one of: {', '.join(methods.NAMES)}"), "settings.method",
-                     methods.NAMES)
+    method = _string(_required(s, "method", "settings", f"one of: {', '.join(methods.METHODS)}"), "settings.method",
+                     tuple(methods.METHODS))
     values = {k: check_value(k, v, field=f"settings.{k}", cls=ScenarioError) for k, v in s.items()
               if k != "method"}
     values.update(_environment(d, values))
@@ -458,11 +463,12 @@ def _ship(t: dict, i: int) -> ShipSpec:
     speed = _ranged(_required(t, "speed", p, _range_text(f"{p}.speed", lo, hi, unit=unit)), f"{p}.speed", lo, hi,
                     unit=unit)
     waypoints = _points(_required(t, "waypoints", p, "a list of waypoints [[x, y], ...]"), f"{p}.waypoints", 1)
-    method = _string(t["method"], f"{p}.method", methods.NAMES) if "method" in t else None
+    method = _string(t["method"], f"{p}.method", tuple(methods.METHODS)) if "method" in t else None
     stays = t.get("stays", False)
     if not isinstance(stays, bool):
         raise ScenarioError(f"{p}.stays", "true or false", stays)
-    return ShipSpec(name, start, heading, speed, waypoints, method, stays)
+    vessel = _string(t["vessel"], f"{p}.vessel", VESSELS) if "vessel" in t else None
+    return ShipSpec(name, start, heading, speed, waypoints, method, stays, vessel)
 
 
 def _obstacle(t: dict, i: int) -> ObstacleSpec:
@@ -592,7 +598,7 @@ def with_method(s: Scenario, method: str) -> Scenario:
     >>> with_method(s, "sink-vortex").settings.method
     'sink-vortex'
     """
-    method = _string(method, "method", methods.NAMES)
+    method = _string(method, "method", tuple(methods.METHODS))
     return dataclasses.replace(s, settings=dataclasses.replace(s.settings, method=method))
 
 
@@ -628,6 +634,8 @@ def _ship_dict(ship: ShipSpec) -> dict:
     if ship.method is not None:
         d["method"] = ship.method
     d["stays"] = ship.stays
+    if ship.vessel is not None:
+        d["vessel"] = ship.vessel
     return d
 
 

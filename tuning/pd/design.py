@@ -39,14 +39,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mmg_casadi.errors import ParameterError, check_range
+from mmg_casadi.params import PARAMETERS
 
 from ..linear import YawModel, nomoto_first_order, yaw_subsystem
 from .analysis import LoopAnalysis, analyse_loop
 
 METHODS = ("placement", "nomoto")
 DOMINANCE = 1.5  #: remaining poles at least this many times faster than the designed pair's slowest pole
-DELTA_MAX_DEG = 35.0
-PAPER_GAINS = (3.5, 4.0)
+DELTA_MAX_DEG = PARAMETERS["delta_max_deg"].default
+PAPER_GAINS = (PARAMETERS["kp"].default, PARAMETERS["kd"].default)
 
 
 @dataclass(frozen=True)

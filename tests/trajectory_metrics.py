@@ -1,4 +1,7 @@
-"""Tracking performance metrics from trajectory arrays (numpy post-processing, paper §3.4).
+"""Tracking metrics from sampled trajectories — the test check of the closed loop's exact CE/MCTE.
+
+The one definition of CE and MCTE is :func:`mmg_casadi.closed_loop.outcome.voyage_metrics`, from integrals the
+compiled step accumulates; the tests compare it with these trajectory integrals (paper §3.4).
 
 Time is non-dimensional, cross-track errors are in ship lengths L, rudder angles in rad. Integrals use the
 trapezoidal rule over the samples and T = t[-1] − t[0]. A trajectory with fewer than two samples (or T ≤ 0) has
@@ -12,8 +15,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from mmg_casadi.errors import check_range
+from mmg_casadi.params import PARAMETERS
 
-DELTA_MAX_DEFAULT = float(np.radians(35.0))
+DELTA_MAX_DEFAULT = float(np.radians(PARAMETERS["delta_max_deg"].default))
 
 
 def _mean_abs(t, x, name):
