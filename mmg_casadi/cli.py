@@ -20,7 +20,10 @@ from pathlib import Path
 
 from mmg_casadi.guidance import methods as registry
 from mmg_casadi.errors import InputError
-from mmg_casadi.io import write_json
+from mmg_casadi.io import write_json, write_text
+from mmg_casadi.limits import MAX_SHIPS
+from mmg_casadi.montecarlo.sampling import sample_traffic
+from mmg_casadi.scenarios.scenario import dump_scenario, scenario_from_dict
 from mmg_casadi.params import PARAMETERS, check_value, help_text, load_file, markdown_table
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
@@ -184,6 +187,13 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--reference", default=None,
                    help="toml->json: LAT,LON of the scenario origin [deg] (default: from the file's header)")
 
+    tr = sub.add_parser("traffic", help="generate N ships on random crossing routes at environment 5's density")
+    tr.add_argument("ships", type=int, help="number of ships (the first is the own ship)")
+    tr.add_argument("--seed", type=int, default=0, help="seed of the generator")
+    tr.add_argument("--method", default=registry.DEFAULT, help="every ship's method")
+    tr.add_argument("--t-max", type=float, default=PARAMETERS["t_max"].default, help="horizon [L/U]")
+    tr.add_argument("--out", type=Path, required=True, help="output scenario file (.toml)")
+
     pp = sub.add_parser("params", help="list every parameter (default, allowed values, unit, meaning, source)")
     pp.add_argument("--markdown", action="store_true", help="as a Markdown table")
     return p
@@ -279,6 +289,19 @@ def _convert(a) -> dict:
                         length_scale=a.length_scale, reference=a.reference)
 
 
+def _traffic(a) -> dict:
+    if a.out.suffix.lower() != ".toml":
+        raise InputError("--out", "a scenario file name ending in .toml", str(a.out))
+    if a.ships > MAX_SHIPS:
+        raise InputError("ships", f"an integer in [1, {MAX_SHIPS}] (MAX_SHIPS)", a.ships)
+    registry.get(a.method, "--method")
+    check_value("t_max", a.t_max, field="--t-max", cls=InputError)
+    sc = scenario_from_dict(sample_traffic(a.ships, a.seed).to_scenario_dict(method=a.method, t_max=a.t_max))
+    write_text(a.out, dump_scenario(sc))
+    print(f"{a.out}: {len(sc.ships)} ships, {len(sc.obstacles)} obstacles")
+    return {"ships": len(sc.ships), "obstacles": len(sc.obstacles)}
+
+
 def _params(a) -> dict:
     print(markdown_table() if a.markdown else help_text())
     return {n: p.default for n, p in PARAMETERS.items()}
@@ -311,7 +334,7 @@ def main(argv=None) -> int:
                                                              getattr(a, "what", None)) if x)
                 raise InputError(extra[0], f"an option of '{prog}' (see '{prog} --help')")
             handlers = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
-                        "convert": _convert, "params": _params}
+                        "convert": _convert, "traffic": _traffic, "params": _params}
             handlers[a.command](a)
     except _CliError as e:
         print(f"mmg-casadi: error: {e}", file=sys.stderr)

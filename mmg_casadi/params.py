@@ -24,8 +24,12 @@ mmg_casadi.errors.ParameterError: kd: expected a number in [0, inf) L/U, got -1.
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
+import re
+import tomllib
 from dataclasses import dataclass
+from pathlib import Path
 
 from mmg_casadi.errors import InputError, ParameterError, check_range
 from mmg_casadi.vessel.library import VESSELS
@@ -158,6 +162,15 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "this collide", "paper §Statistical Analysis (collision within 2 L)", "simulation", low_open=True),
     _P("goal_tolerance", 3.0, 0.0, None, "L", "waypoint acceptance radius R_tol; the goal is reached within it",
        "paper Table 2 (R_tol = 3 L)", "simulation", low_open=True),
+    _P("fleet_from_ships", 16, 2, None, "", "a scenario of at least this many ships runs the fleet step (one "
+       "ship's step mapped over the fleet; compile cost independent of the fleet) instead of the unrolled step",
+       "our choice from benchmarks/fleet_scaling.py: the unrolled step compiles in 12/37/73/144 s at 10/20/30/40 "
+       "ships, the fleet step in 3-4 s; per ship-step 18-27 µs vs 21-29 µs; every paper scenario (<= 10 ships) "
+       "stays unrolled", "simulation", kind="int", structural=True),
+    _P("neighbour_slots", 16, 1, 64, "", "neighbours a ship of the fleet step sees: the nearest within the "
+       "candidate radius R_safe + 2 V_max T_chunk; with more, the farther ones are ignored (counted)",
+       "our choice: 4 × the about 3.5 candidates expected at environment 5's density within 25 L",
+       "simulation", kind="int", structural=True),
     _P("ship_radius", 0.5, 0.0, None, "L", "radius of another ship as an inverse-square obstacle",
        "our choice: half a ship length, like the paper's static obstacles", "simulation", low_open=True),
     # vessel and engine
@@ -472,8 +485,6 @@ def load_file(path) -> dict:
     >>> load_file(f)
     {'r_safe': 12.0}
     """
-    import tomllib
-    from pathlib import Path
     path = Path(path)
     try:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -491,6 +502,4 @@ def load_file(path) -> dict:
 
 def _key(k: str) -> str:
     """A TOML key as written in a file: bare if it can be, else quoted (one line, never empty)."""
-    import json
-    import re
     return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else json.dumps(k)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from matplotlib.colors import hsv_to_rgb
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
 
@@ -342,3 +343,54 @@ def plot_tracking(result, path=None) -> Figure:
     if path:
         fig.savefig(path, dpi=110)
     return fig
+
+
+def plot_fleet(result, path=None, *, title=None, ax=None) -> Figure:
+    """Tracks of a large fleet (marine view): one colour per ship from a cyclic colour map, thin lines, a dot at
+    each start, a cross at each collision, the static obstacles in black. For scenarios of many ships, where
+    :func:`plot_scenario`'s legends and pair panels do not scale.
+
+    Parameters
+    ----------
+    result : mmg_casadi.scenarios.run.ScenarioResult
+        Result of the scenario run.
+    path : str or path-like, optional
+        File to save the figure to.
+    title : str, optional
+        Axes title (default: ships, collisions, goals reached).
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure when omitted.
+    """
+    traj, sc = result.trajectory, result.scenario
+    N = traj.layout.n_ships
+    if ax is None:
+        fig = Figure(figsize=(10, 10), layout="constrained")
+        ax = fig.add_subplot()
+    fig = ax.figure
+    mask = traj.sailing_mask()
+    colours = _cyclic_colours(N)
+    for i in range(N):
+        m = mask[:, i]
+        ax.plot(traj.state("y", i)[m], traj.state("x", i)[m], color=colours[i], lw=0.6)
+        ax.plot(sc.ships[i].start[1], sc.ships[i].start[0], "o", color=colours[i], ms=2.5)
+    for s in result.metrics["ships"]:
+        if s["collided"]:
+            i = result.names().index(s["name"])
+            k = int(np.searchsorted(traj.t, s["collision_time"]))
+            k = min(k, len(traj.t) - 1)
+            ax.plot(traj.state("y", i)[k], traj.state("x", i)[k], "kx", ms=6, mew=1.5)
+    for o in sc.obstacles:
+        ax.plot(o.position[1], o.position[0], "ks", ms=2.5)
+    marine_axes(ax)
+    ships = result.metrics["ships"]
+    n_col = sum(s["collided"] for s in ships)
+    n_goal = sum(s["reached_goal"] for s in ships)
+    ax.set_title(title or f"{N} ships: {n_col} in a collision (×), {n_goal} reached their goals")
+    if path is not None:
+        fig.savefig(path, dpi=150)
+    return fig
+
+
+def _cyclic_colours(n: int) -> list:
+    """``n`` colours that neighbours in index order tell apart (a golden-ratio walk round the hue circle)."""
+    return [hsv_to_rgb(((0.618033988749895 * i) % 1.0, 0.85, 0.8 - 0.25 * (i % 3) / 2)) for i in range(n)]

@@ -14,6 +14,7 @@ from mmg_casadi.guidance import methods as registry
 from mmg_casadi.scenarios.imazu import CASES, plot_imazu, run_imazu
 from mmg_casadi.io import write_json
 from mmg_casadi.params import resolve
+from mmg_casadi.errors import InputError
 
 DEFAULT_METHODS = ("colregs-vortex", "modified-vortex", "velocity-obstacle")
 TARGETS = ("hold", "avoid")
@@ -47,7 +48,6 @@ def run(out, *, methods=None, params=None, targets: str = "both") -> dict:
     targets : {"hold", "avoid", "both"}
         Targets hold course and speed, avoid with the own ship's method, or both in turn.
     """
-    from mmg_casadi.errors import InputError
     if targets not in TARGETS + ("both",):
         raise InputError("targets", "one of: hold, avoid, both", targets)
     out = Path(out)

@@ -24,6 +24,7 @@ verdict proves.
 
 from __future__ import annotations
 
+import json
 import math
 import sys
 from pathlib import Path
@@ -548,7 +549,6 @@ def claims_markdown(claims, *, runs: int | None = None) -> str:
     |---|---|---|---|---|---|---|
     | W1 | Waypoint tracking | CE | 0.12 | 0.13 | – | reproduced |
     """
-    import json
     head = ["# Reproduction of the paper, claim by claim", ""]
     if runs is not None:
         head += [f"Statistical analysis: {runs} runs per environment and method (the paper: {PAPER_RUNS}).", ""]

@@ -10,6 +10,7 @@ inverse-square APF and the velocity obstacle. Outputs in ``DIR``: ``runs.csv``, 
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -55,5 +56,4 @@ def run(out, *, runs: int = 200, envs="1-5", methods=None, base_seed: int = 0, p
                         params=params, backend=backend, address=address, workers=workers, current=current,
                         wind=wind)
     print(summary.to_markdown(), file=sys.stderr)
-    import json
     return json_safe(json.loads((out / "metrics.json").read_text(encoding="utf-8")))

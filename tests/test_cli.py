@@ -117,3 +117,34 @@ def test_params_file_with_r_safe_as_written_by_tune_apf(tmp_path):
     p = tmp_path / "params.toml"
     p.write_text("[params]\nk_vor0 = -20.0\nlam_sink = -150.0\nr_safe = 12.0\n")
     assert main(["simulate", str(SCENARIOS / "head_on.toml"), "--params", str(p), "--out", str(tmp_path / "a")]) == 0
+
+
+def test_generated_traffic_simulates_with_the_fleet_step(tmp_path):
+    f = tmp_path / "traffic.toml"
+    assert main(["traffic", "24", "--seed", "3", "--t-max", "10", "--out", str(f)]) == 0
+    assert main(["simulate", str(f), "--out", str(tmp_path / "run")]) == 0
+    m = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert len(m["ships"]) == 24 and m["t_end"] == 10.0
+    assert m["params"]["fleet_from_ships"] <= 24  # so the fleet step ran
+    assert (tmp_path / "run" / "scenario.png").stat().st_size > 10_000
+    # in a fleet scenario, pairs are those that came within R_safe
+    assert all(p["min_distance"] <= m["params"]["r_safe"] for p in m["pairs"])
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["traffic", "2001"], "ships"),
+    (["traffic", "10", "--method", "vortex"], "--method"),
+    (["traffic", "10", "--t-max", "-1"], "--t-max"),
+])
+def test_traffic_refuses_bad_input(tmp_path, capsys, argv, field):
+    out = tmp_path / "t.toml"
+    assert main([*argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and field in err[0] and not out.exists()
+
+
+def test_more_steps_than_the_limit_are_refused_before_any_work(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["simulate", str(SCENARIOS / "head_on.toml"), "--set", "dt=1e-6", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "MAX_STEPS" in err and not out.exists()

@@ -22,12 +22,15 @@ the disk cache; 2 × 2000 held-out runs in each of the five environments, 21 min
 
 from __future__ import annotations
 
+import json
 import sys
 import time
 from pathlib import Path
 
 from mmg_casadi.errors import InputError
 from mmg_casadi.io import write_json
+from mmg_casadi.montecarlo.results import ResultsTable
+from mmg_casadi.montecarlo.study import run_study
 from mmg_casadi.params import PARAMETERS, resolve
 from mmg_casadi.scenarios.scenario import with_params
 
@@ -109,8 +112,6 @@ def heldout(out, sets: dict, *, runs: int, envs, base_seed: int, workers=None) -
     workers : int, optional
         Local worker processes.
     """
-    from mmg_casadi.montecarlo.study import run_study
-    from mmg_casadi.montecarlo.results import ResultsTable
     res = {}
     for name, params in sets.items():
         d = Path(out) / name
@@ -124,7 +125,6 @@ def heldout(out, sets: dict, *, runs: int, envs, base_seed: int, workers=None) -
 def _check_settings(path: Path, settings: dict) -> None:
     """Record the settings of the training objective in ``path``; refuse to resume a directory whose stored
     evaluations were made with other settings (the evaluation log is keyed by θ only)."""
-    import json
     if path.exists():
         stored = json.loads(path.read_text(encoding="utf-8"))
         if stored != json.loads(json.dumps(settings)):

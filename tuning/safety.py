@@ -52,6 +52,7 @@ from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.errors import InputError, check_range
 from mmg_casadi.params import PARAMETERS
 from mmg_casadi.scenarios.run import build_problem
+from mmg_casadi.closed_loop.simulation import simulate_batch
 
 THETA = ("k_vor0", "r_safe")
 """Tuned parameters, in the order of θ (Λ_sink is held at the paper's value, see the module docstring)."""
@@ -306,7 +307,6 @@ def prepare_case(name: str, sc, config: SafetyConfig = SafetyConfig()) -> Safety
     config : SafetyConfig
         ``dt``, ``max_steps``, ``horizon_margin``, ``smooth``.
     """
-    from mmg_casadi.closed_loop.simulation import simulate_batch
     pr = build_problem(sc, {"k_vor0": PAPER[0], "r_safe": PAPER[1], "lam_sink": LAM_SINK})
     xf, _ = simulate_batch(pr.layout, pr.x0[:, None], pr.p[:, None])
     row = run_outcome(pr.layout, xf[:, 0], pr.params)

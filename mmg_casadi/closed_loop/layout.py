@@ -92,6 +92,9 @@ class Layout:
     vessels : tuple of str
         Vessel of each ship (names of :data:`mmg_casadi.vessel.library.VESSELS`); empty: every ship is the
         default vessel.
+    neighbours : int
+        0 for the unrolled step (every ship and pair written out); ``K > 0`` for the fleet step, one ship's step
+        mapped over the fleet with ``K`` neighbour slots (:mod:`mmg_casadi.closed_loop.fleet`).
     """
 
     methods: tuple
@@ -104,6 +107,7 @@ class Layout:
     smooth: float | None = None
     disturbed: bool = False
     vessels: tuple = ()
+    neighbours: int = 0
 
     @property
     def n_ships(self) -> int:
@@ -216,10 +220,20 @@ class Layout:
         meth = "_".join(m.replace("-", "") for m in self.methods)
         if len(set(self.methods)) == 1:
             meth = f"{self.methods[0].replace('-', '')}x{self.n_ships}"
+        elif self.n_ships > 16:  # long fleets: runs of one method as name x count
+            runs = [[self.methods[0], 0]]
+            for m in self.methods:
+                if m == runs[-1][0]:
+                    runs[-1][1] += 1
+                else:
+                    runs.append([m, 1])
+            meth = "_".join(f"{m.replace('-', '')}x{n}" for m, n in runs)
         s = "" if self.smooth is None else f"_s{self.smooth:g}".replace(".", "p")
         s += "_env" if self.disturbed else ""
         if any(v != DEFAULT_VESSEL for v in self.vessels):
-            s += "_" + "_".join(self.vessels)
+            s += "_" + "_".join(f"{v}{self.vessels.count(v)}" for v in dict.fromkeys(self.vessels))
+        if self.neighbours:
+            s += f"n{self.neighbours}"
         return (f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}"
                 f"{'h' if self.vo_hold else ''}{s}")
 

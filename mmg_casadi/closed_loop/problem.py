@@ -18,6 +18,7 @@ from mmg_casadi.closed_loop.simulation import compiled_step
 from mmg_casadi.closed_loop.step import build_closed_loop_step
 from mmg_casadi.errors import ParameterError, ScenarioError
 from mmg_casadi.guidance import methods
+from mmg_casadi.limits import check_size, check_steps
 from mmg_casadi.params import resolve
 from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
@@ -187,6 +188,8 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
     for w in sc.walls:
         pts = np.asarray(w.points, float)
         walls += [(a[0], a[1], b[0], b[1]) for a, b in zip(pts[:-1], pts[1:])]
+    check_size(len(sc.ships), len(sc.obstacles), len(walls), cls=ScenarioError)
+    check_steps(resolved["t_max"], resolved["dt"], cls=error or ParameterError)
     vessels = tuple(getattr(s, "vessel", None) or resolved["vessel"] for s in sc.ships)
     for i, v in enumerate(vessels):
         load_vessel(v, f"ships[{i}].vessel")
@@ -194,7 +197,8 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
                     max_path=max(1 + len(s.waypoints) for s in sc.ships),
                     vo_candidates=resolved["vo_candidates"], vo_cone=resolved["vo_cone"],
                     disturbed=is_disturbed(resolved), vo_hold=resolved["vo_hold"],
-                    vessels=() if set(vessels) == {DEFAULT_VESSEL} else vessels)
+                    vessels=() if set(vessels) == {DEFAULT_VESSEL} else vessels,
+                    neighbours=resolved["neighbour_slots"] if len(sc.ships) >= resolved["fleet_from_ships"] else 0)
     model = ClosedLoopModel(layout, resolved)
     ships = tuple({"n_rpm": propeller_rpm_for_speed(s.speed, load_vessel(v).ship), "path": [s.start, *s.waypoints],
                    "stays": s.stays, "start": s.start, "heading": s.heading_rad, "speed": s.speed}

@@ -15,7 +15,9 @@ import casadi as ca
 import numpy as np
 
 from mmg_casadi.closed_loop.compiled import compile_function
+from mmg_casadi.closed_loop.fleet import build_fleet_step, candidate_radius, neighbour_lists
 from mmg_casadi.closed_loop.layout import Layout
+from mmg_casadi.errors import InputError
 from mmg_casadi.closed_loop.state import ship_rows
 from mmg_casadi.closed_loop.step import AUX, build_closed_loop_step, build_guidance
 
@@ -29,14 +31,17 @@ def rollout_functions(layout: Layout) -> list[ca.Function]:
     layout : Layout
         Closed-loop layout (ships, obstacles, walls, method) of the Functions.
     """
+    if layout.neighbours:
+        return [build_fleet_step(layout)]
     sparse = layout.smooth is None
     return [build_closed_loop_step(layout, sparse=sparse), build_guidance(layout, sparse=sparse)]
 
 
 @lru_cache(maxsize=64)
-def _library(layout: Layout) -> tuple[ca.Function, ca.Function]:
-    step, guidance = rollout_functions(layout)
-    return tuple(compile_function(step, also=[guidance]))
+def _library(layout: Layout) -> tuple[ca.Function, ...]:
+    step, *also = rollout_functions(layout)
+    compiled = compile_function(step, also=also)
+    return tuple(compiled) if also else (compiled,)
 
 
 def compiled_step(layout: Layout) -> ca.Function:
@@ -57,9 +62,21 @@ def compiled_guidance(layout: Layout) -> ca.Function:
     Parameters
     ----------
     layout : Layout
-        Closed-loop layout (ships, obstacles, walls, method) of the Function.
+        Closed-loop layout (ships, obstacles, walls, method) of the Function (not a fleet layout).
     """
+    _check_unrolled(layout, "compiled_guidance")
     return _library(layout)[1]
+
+
+def _check_unrolled(layout: Layout, what: str) -> None:
+    if layout.neighbours:
+        raise InputError(what, "a layout of the unrolled step (a fleet layout is rolled out by simulate only)",
+                         f"{layout.n_ships} ships with {layout.neighbours} neighbour slots")
+
+
+FLEET_CHUNK = 4
+"""Steps per compiled call of a fleet rollout: the neighbour lists are renewed between calls, and the candidate
+radius grows with the chunk (:func:`~mmg_casadi.closed_loop.fleet.candidate_radius`)."""
 
 
 @lru_cache(maxsize=64)
@@ -169,12 +186,16 @@ class Trajectory:
         Ship states, columns named by :attr:`~mmg_casadi.closed_loop.layout.Layout.ship_state`.
     aux : ndarray (T, N, 4)
         Commanded rudder, desired heading, cross-track error and reactive flag used over each step.
+    neighbour_overflows : int, default 0
+        Fleet step only: how many times a ship had more candidate neighbours than slots and kept the nearest
+        (:func:`~mmg_casadi.closed_loop.fleet.neighbour_lists`); 0 means every step was exact.
     """
 
     layout: Layout
     t: np.ndarray
     states: np.ndarray
     aux: np.ndarray
+    neighbour_overflows: int = 0
 
     def state(self, name: str, ship: int | None = None) -> np.ndarray:
         """History of one state variable, ``(T+1, N)`` or ``(T+1,)`` for one ship.
@@ -258,12 +279,22 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200)
     chunk : int
         Steps per compiled ``mapaccum`` call.
     """
+    fleet = layout.neighbours > 0
+    if fleet:
+        chunk = FLEET_CHUNK
+        radius = candidate_radius(float(p[layout.param_index("r_safe")]), float(p[layout.param_index("dt")]), chunk)
     F = _chunk(layout, chunk, 1)
     t_max = float(p[layout.param_index("t_max")])
     xs, auxs = [np.asarray(x0, float)[:, None]], []
     x = np.asarray(x0, float)
+    overflow = 0
     while not _finished(layout, x, t_max)[0]:
-        Xc, Ac = F(x, p)
+        if fleet:
+            nbr, over = neighbour_lists(layout, x, p, radius)
+            overflow += over
+            Xc, Ac = F(x, p, nbr)
+        else:
+            Xc, Ac = F(x, p)
         Xc = np.array(Xc)
         # mapaccum stacks the (NAUX, N) output of each step horizontally: step-major blocks of N columns
         Ac = np.array(Ac).reshape(len(AUX), chunk, layout.n_ships)
@@ -280,7 +311,7 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200)
         stop = int(np.argmax(fin))
     X, A = X[:, :stop + 1], A[:stop]
     states = ship_rows(layout, X)
-    return Trajectory(layout, X[0].copy(), states, A)
+    return Trajectory(layout, X[0].copy(), states, A, overflow)
 
 
 DEFAULT_WIDTH = 32
@@ -330,6 +361,7 @@ def _stream(layout: Layout, X0, P, width, call) -> tuple[np.ndarray, float]:
     """Step the columns of ``X0`` / ``P`` at most ``width`` at a time with ``call(x, p, active) -> x_next``
     (``active``: the original column indices of ``x``, -1 for padding); a column that finished leaves the batch
     and a waiting one takes its place. Returns the final states and the time spent in ``call``."""
+    _check_unrolled(layout, "simulate_batch")
     X0 = np.asarray(X0, float)
     P = np.asarray(P, float)
     M = X0.shape[1]
@@ -420,6 +452,7 @@ def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chu
     """
     if isinstance(every, bool) or not isinstance(every, int) or every < 1 or chunk % every:
         raise ValueError(f"every: expected an integer >= 1 dividing chunk={chunk}, got {every!r}")
+    _check_unrolled(layout, "simulate_batch_history")
     X0 = np.asarray(X0, float)
     M, N = X0.shape[1], layout.n_ships
     rows = [0] + [layout.row(name, i) for i in range(N) for name in HISTORY_STATE]

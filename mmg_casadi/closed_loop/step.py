@@ -149,9 +149,11 @@ def _step_context(layout: Layout, x, p, shared=None) -> dict:
             "running": running, "sailing": sailing, "present": present}
 
 
-def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bool = False):
+def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bool = False, nb=None,
+                 method: str | None = None):
     """Ship ``i``'s state after the step while it sails (``layout.ns`` rows; the caller holds a ship that does
-    not) and its ``aux`` column."""
+    not) and its ``aux`` column. Its neighbours are every other ship and obstacle of ``c``, or ``nb`` = (positions,
+    velocities, radii, presence) of gathered neighbour slots (the fleet step)."""
     N, S, W = layout.n_ships, layout.n_obstacles, layout.n_walls
     sm = layout.smooth
     P, S_, t, X, pos, psi, vel, E = c["P"], c["S"], c["t"], c["X"], c["pos"], c["psi"], c["vel"], c["E"]
@@ -161,15 +163,18 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     walls = P["walls"]
     Xi = X[i]
     Pi = P["ships"][i]
-    method = layout.methods[i]
+    method = method or layout.methods[i]
     terms = ilos_step_terms(pos[i], Pi["path"], Xi[S_["idx"]], Xi[S_["y_int"]], P["ilos_delta"], P["ilos_k"])
     goal = terms["wp_next"]
-    others = [j for j in range(N) if j != i]
-    nb_pos = ca.horzcat(*[pos[j] for j in others], obs[0:2, :]) if (others or S) else ca.SX(2, 0)
-    nb_vel = ca.horzcat(*[vel[j] for j in others], ca.SX.zeros(2, S)) if (others or S) else ca.SX(2, 0)
-    nb_rad = ca.horzcat(*[P["ship_radius"] for _ in others], obs[2:3, :]) if (others or S) else ca.SX(1, 0)
-    nb_present = ca.horzcat(*[present[j] for j in others], ca.SX.ones(1, S)) if (others or S) else ca.SX(1, 0)
-    M = len(others) + S
+    if nb is None:
+        others = [j for j in range(N) if j != i]
+        nb_pos = ca.horzcat(*[pos[j] for j in others], obs[0:2, :]) if (others or S) else ca.SX(2, 0)
+        nb_vel = ca.horzcat(*[vel[j] for j in others], ca.SX.zeros(2, S)) if (others or S) else ca.SX(2, 0)
+        nb_rad = ca.horzcat(*[P["ship_radius"] for _ in others], obs[2:3, :]) if (others or S) else ca.SX(1, 0)
+        nb_present = ca.horzcat(*[present[j] for j in others], ca.SX.ones(1, S)) if (others or S) else ca.SX(1, 0)
+    else:
+        nb_pos, nb_vel, nb_rad, nb_present = nb
+    M = nb_pos.size2()
     if M:
         d_nb = ca.sqrt(ca.sum1((nb_pos - ca.repmat(pos[i], 1, M)) ** 2))
         active = nb_present * _indicator(P["r_safe"] - d_nb, sm)

@@ -45,6 +45,7 @@ import numpy as np
 
 from mmg_casadi.errors import InputError
 from mmg_casadi.params import PARAMETERS
+from mmg_casadi.vessel.maneuvers import turning_circle
 
 MECHANISMS: tuple[str, ...] = ("started-too-close", "obstacle-near-goal", "near-goal", "ship-ship", "obstacle",
                                "stalled", "timeout", "diverged")
@@ -68,7 +69,6 @@ def turn_time_90(rudder_deg: float = PARAMETERS["delta_max_deg"].default, speed:
     >>> 3.0 < turn_time_90() < 8.0
     True
     """
-    from mmg_casadi.vessel.maneuvers import turning_circle
     res = turning_circle(rudder_deg, speed=speed, t_end=40.0)
     psi = np.abs(res.state("psi"))
     k = int(np.argmax(psi >= math.pi / 2))
@@ -81,7 +81,6 @@ def turn_time_90(rudder_deg: float = PARAMETERS["delta_max_deg"].default, speed:
 @lru_cache(maxsize=64)
 def _hard_turn(rudder_deg: float, speed: float) -> tuple[np.ndarray, np.ndarray]:
     """Times and positions (K, 2) of a hard starboard turn from the origin, heading 0, until 180°."""
-    from mmg_casadi.vessel.maneuvers import turning_circle
     res = turning_circle(rudder_deg, speed=speed, t_end=80.0 / speed)
     psi = np.abs(res.state("psi"))
     k = int(np.argmax(psi >= math.pi)) if (psi >= math.pi).any() else len(psi) - 1

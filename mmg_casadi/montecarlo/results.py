@@ -16,9 +16,12 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+import pandas as pd
+
 from mmg_casadi.closed_loop.outcome import RUN_FAILURES
 from mmg_casadi.errors import InputError
 from mmg_casadi.montecarlo import failures as failure_mechanisms
+from mmg_casadi.montecarlo.stats import wilson
 
 RUN_COLUMNS: tuple[str, ...] = (
     "environment", "method", "run", "seed", "success", "fleet_success", "failure", "failure_pair",
@@ -307,9 +310,8 @@ def wilson_interval(k: int, n: int, z: float = Z_95) -> tuple[float, float]:
         raise InputError("k", f"an integer in [0, {n}]", k)
     if not z > 0:
         raise InputError("z", "a number > 0", z)
-    from scipy.stats import norm
+    from scipy.stats import norm  # scipy.stats takes about 1 s to import: only when an interval is asked for
 
-    from mmg_casadi.montecarlo.stats import wilson
     p = k / n
     low, high = wilson(k, n, confidence=float(2 * norm.cdf(z) - 1))
     # the interval always contains p; clamp so rounding at k = 0 or k = n cannot put p outside it
@@ -440,12 +442,7 @@ class Summary:
         return "\n".join(lines)
 
     def to_pandas(self):
-        """The summary as a ``pandas.DataFrame`` (pandas is imported only here)."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("Summary.to_pandas() needs pandas, which is not installed; install it "
-                              "(pip install pandas) or use Summary.rows / Summary.to_csv() instead") from None
+        """The summary as a ``pandas.DataFrame``."""
         return pd.DataFrame(self.rows, columns=list(SUMMARY_COLUMNS))
 
 

@@ -339,6 +339,51 @@ def sample_scenario(environment: int, run: int, base_seed: int = 0,
                            obstacle_radius=float(config.obstacle_radius))
 
 
+TRAFFIC_DENSITY = ENVIRONMENTS[5]
+"""Static obstacles and dynamic ships per own ship of :func:`sample_traffic`: environment 5's, in its
+``area`` (4 obstacles and 10 ships in 100 L × 100 L)."""
+
+
+def sample_traffic(n_ships: int, seed: int = 0, config: SamplerConfig = SamplerConfig()) -> SampledScenario:
+    """``n_ships`` ships on random crossing routes at environment 5's density, for fleet-scale runs.
+
+    The square's side grows as ``area × sqrt(n_ships / 10)`` so that ships (and ``round(0.4 n_ships)`` static
+    obstacles) have environment 5's density; starts, goals, headings and speeds follow the rules of
+    :func:`sample_scenario` (the same separation, goal distance and speed range), so routes cross everywhere.
+    The result has ``environment = 0`` (generated traffic, not one of the paper's environments).
+
+    Parameters
+    ----------
+    n_ships : int
+        Number of ships (>= 1), the own ship first.
+    seed : int
+        Seed of the generator (``SeedSequence([seed, 0, n_ships])``).
+    config : SamplerConfig
+        Placement rules; ``area`` is the side for 10 ships.
+
+    Examples
+    --------
+    >>> s = sample_traffic(40, seed=1)
+    >>> s.n_ships, s.n_obstacles, bool(np.all(s.starts <= 200.0))
+    (40, 16, True)
+    """
+    n_ships = _check_int("n_ships", n_ships, "an integer >= 1", low=1)
+    seed = _check_int("seed", seed, "an integer >= 0")
+    n_static_env, n_dynamic_env = TRAFFIC_DENSITY
+    per_ship = n_static_env / (1 + n_dynamic_env)
+    n_static = int(round(per_ship * n_ships))
+    area = config.area * math.sqrt(n_ships / (1 + n_dynamic_env))
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 0, n_ships]))
+    points = _draw_separated(rng, n_ships + n_static, area, config.min_start_separation)
+    starts = np.vstack([points[:1], points[1 + n_static:]])
+    obstacles = points[1:1 + n_static]
+    goals = np.array([_draw_goal(rng, s, area, config.min_goal_distance) for s in starts])
+    headings = rng.uniform(-math.pi, math.pi, size=n_ships)
+    speeds = np.concatenate([[1.0], rng.uniform(*config.speed_range, size=n_ships - 1)])
+    return SampledScenario(environment=0, run=0, seed=seed, starts=starts, goals=goals, headings=headings,
+                           speeds=speeds, obstacles=obstacles, obstacle_radius=float(config.obstacle_radius))
+
+
 def parse_envs(text: str) -> tuple[int, ...]:
     """Parse a CLI list of environments: ``"1-5"``, ``"1,3,5"`` or a mix such as ``"1-2,5"``.
 

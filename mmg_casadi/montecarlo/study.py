@@ -49,6 +49,7 @@ import numpy as np
 from mmg_casadi.errors import InputError
 from mmg_casadi.guidance import methods as method_registry
 from mmg_casadi.io import write_json
+from mmg_casadi.limits import check_runs
 from mmg_casadi.montecarlo.batching import (BACKENDS, DEFAULT_BATCH, LocalExecutor, RayExecutor, _check_workers,
                                             plan_batches, prepare_layouts)
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges
@@ -138,7 +139,7 @@ def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT
     Summary
         The summary of the requested cells (rows already in ``runs.csv`` included).
     """
-    runs = _check_int("runs", runs, 1)
+    runs = check_runs(_check_int("runs", runs, 1), "runs")
     if backend not in BACKENDS:
         raise InputError("backend", f"one of: {', '.join(BACKENDS)}", backend)
     if address is not None and backend != "ray":

@@ -21,10 +21,12 @@ judgement, :func:`mmg_casadi.closed_loop.outcome.ship_outcomes` (``ce``/``mcte``
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.spatial import cKDTree
 
 from mmg_casadi.closed_loop.outcome import ship_outcomes
 from mmg_casadi.closed_loop.problem import build_problem
@@ -75,7 +77,7 @@ class ScenarioResult:
             Draw the ships' paths (marine view) into ``ax``; without it a new figure with paths, rudder and
             distance panels (as ``simulate`` saves) is made.
         """
-        from mmg_casadi.plotting import plot_paths, plot_scenario
+        from mmg_casadi.plotting import plot_paths, plot_scenario  # matplotlib: only when drawing
         if ax is None:
             return plot_scenario(self)
         plot_paths(self, ax)
@@ -106,21 +108,19 @@ class ScenarioResult:
 
     def pair_distances(self) -> dict:
         """Distance histories ``{(a, b): d(t)}`` for every ship pair and ship–obstacle pair (NaN while a ship is
-        not sailing)."""
+        not sailing); in a fleet scenario (the fleet step) only for the pairs that came within R_safe."""
         tr = self.trajectory
         mask = tr.sailing_mask()
         names = self.names()
-        N = len(names)
         out = {}
-        for i in range(N):
-            pi = np.column_stack([tr.state("x", i), tr.state("y", i)])
-            for j in range(i + 1, N):
-                pj = np.column_stack([tr.state("x", j), tr.state("y", j)])
-                d = np.linalg.norm(pi - pj, axis=1)
-                out[(names[i], names[j])] = np.where(mask[:, i] & mask[:, j], d, np.nan)
-            for k, o in enumerate(self.scenario.obstacles):
-                d = np.linalg.norm(pi - np.asarray(o.position), axis=1)
-                out[(names[i], f"obstacle{k}")] = np.where(mask[:, i], d, np.nan)
+        pairs, obstacle_pairs = _pairs(self.scenario, tr, mask, self.params["r_safe"])
+        for i, j in pairs:
+            d = np.hypot(tr.state("x", i) - tr.state("x", j), tr.state("y", i) - tr.state("y", j))
+            out[(names[i], names[j])] = np.where(mask[:, i] & mask[:, j], d, np.nan)
+        for i, k in obstacle_pairs:
+            o = self.scenario.obstacles[k]
+            d = np.hypot(tr.state("x", i) - o.position[0], tr.state("y", i) - o.position[1])
+            out[(names[i], f"obstacle{k}")] = np.where(mask[:, i], d, np.nan)
         return out
 
     def own_distance(self) -> np.ndarray:
@@ -176,7 +176,6 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
 
 
 def _packaged_names() -> list[str]:
-    from importlib import resources
     return sorted(p.name[:-5] for p in resources.files("mmg_casadi").joinpath("data", "scenarios").iterdir()
                   if p.name.endswith(".toml"))
 
@@ -195,7 +194,6 @@ def packaged_scenario(name: str) -> Scenario:
     >>> [s.name for s in packaged_scenario("crossing").ships]
     ['ship1', 'ship2']
     """
-    from importlib import resources
     names = _packaged_names()
     if name not in names:
         raise InputError("scenario", f"one of: {', '.join(names)}", name)
@@ -246,9 +244,16 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
         })
     pairs = []
     labels: dict = {}
+    ship_pairs, obstacle_pairs = _pairs(sc, traj, mask, g["r_safe"])
+    partners = {i: [] for i in range(N)}
+    for i, j in ship_pairs:
+        partners[i].append(j)
+    obstacles_of = {i: [] for i in range(N)}
+    for i, k in obstacle_pairs:
+        obstacles_of[i].append(k)
     for i in range(N):
         pi = np.column_stack([traj.state("x", i), traj.state("y", i)])
-        for j in range(i + 1, N):
+        for j in partners[i]:
             pj = np.column_stack([traj.state("x", j), traj.state("y", j)])
             a = assess_pair(traj.t, pi, traj.state("psi", i), pj, traj.state("psi", j),
                             r_safe=g["r_safe"], collision_distance=g["collision_distance"],
@@ -261,7 +266,8 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
                 if enc not in (None, "none"):
                     tag = f"{enc} {'✓' if ok else '✗' if ok is not None else ''}".strip()
                     labels[k] = ", ".join(filter(None, [labels.get(k), tag]))
-        for k, o in enumerate(sc.obstacles):
+        for k in obstacles_of[i]:
+            o = sc.obstacles[k]
             d = np.linalg.norm(pi - np.asarray(o.position), axis=1)
             d = np.where(mask[:, i], d, np.inf)
             kmin = int(np.argmin(d))
@@ -272,6 +278,28 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     metrics = {"method": sc.settings.method, "collision": bool(collision), "t_end": t_end,
                "params": dict(params), "ships": ships, "pairs": pairs}
     return ScenarioResult(sc, traj, json_safe(metrics), labels)
+
+
+def _pairs(sc, traj: Trajectory, mask: np.ndarray, r_safe: float) -> tuple[list, list]:
+    """The ship pairs ``(i, j)``, ``i < j``, and ship–obstacle pairs ``(i, k)`` a result reports: all of them, or in
+    a fleet scenario (the fleet step) those that came within ``r_safe`` while sailing (a k-d tree per sample)."""
+    N, S = traj.layout.n_ships, len(sc.obstacles)
+    if not traj.layout.neighbours:
+        return [(i, j) for i in range(N) for j in range(i + 1, N)], [(i, k) for i in range(N) for k in range(S)]
+    ships, obstacles = set(), set()
+    obs = np.array([o.position for o in sc.obstacles], float).reshape(S, 2)
+    for k in range(len(traj.t)):
+        sailing = np.flatnonzero(mask[k])
+        if not len(sailing):
+            continue
+        pts = np.column_stack([traj.states[k, sailing, traj.layout.column("x")],
+                               traj.states[k, sailing, traj.layout.column("y")]])
+        tree = cKDTree(pts)
+        ships |= {(int(sailing[a]), int(sailing[b])) for a, b in tree.query_pairs(r_safe)}
+        if S:
+            for a, near in enumerate(tree.query_ball_point(obs, r_safe)):
+                obstacles |= {(int(sailing[b]), a) for b in near}
+    return sorted((min(p), max(p)) for p in ships), sorted(obstacles)
 
 
 def write_outputs(res: ScenarioResult, out, *, figure_name: str = "scenario.png", tracking: bool = False) -> None:
@@ -288,10 +316,11 @@ def write_outputs(res: ScenarioResult, out, *, figure_name: str = "scenario.png"
     tracking : bool
         Draw the waypoint-tracking figure instead of the encounter figure.
     """
-    from mmg_casadi.plotting import plot_scenario, plot_tracking
+    from mmg_casadi.plotting import plot_fleet, plot_scenario, plot_tracking  # matplotlib: only when writing
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     res.trajectory.to_npz(out / "trajectory.npz")
     res.trajectory.to_csv(out / "trajectory.csv", names=res.names())
-    (plot_tracking if tracking else plot_scenario)(res, out / figure_name)
+    figure = plot_tracking if tracking else plot_fleet if res.trajectory.layout.neighbours else plot_scenario
+    figure(res, out / figure_name)
     write_json(out / "metrics.json", res.metrics)

@@ -73,7 +73,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.errors import check_range
+from mmg_casadi.errors import ParameterError, check_range
 
 ENV_NAMES = ("V_c", "beta_c", "U_w", "psi_w")
 NENV = len(ENV_NAMES)
@@ -522,7 +522,6 @@ def gust_speeds(n_steps: int, dt: float, mean_speed: float, *, intensity: float 
     True
     """
     if not isinstance(n_steps, (int, np.integer)) or isinstance(n_steps, bool) or n_steps < 1:
-        from mmg_casadi.errors import ParameterError
         raise ParameterError("n_steps", "an integer >= 1", n_steps)
     check_range("dt", dt, 0.0, None, low_open=True, unit="L/U_design")
     check_range("mean_speed", mean_speed, 0.0, 5.0, unit="x U_design")

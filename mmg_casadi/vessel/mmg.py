@@ -18,6 +18,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from mmg_casadi.errors import ParameterError
 from mmg_casadi.vessel.actuators import steering_rate
 from mmg_casadi.vessel.environment import NENV, Windage, current_kinematics, ground_velocity, wind_forces
 from mmg_casadi.vessel.ship import ShipParams, SteeringParams, load_kcs, load_steering
@@ -335,7 +336,6 @@ def propeller_rpm_for_speed(speed: float, ship: ShipParams | None = None) -> flo
     """
     ship = ship or load_kcs()
     if not speed > 0:
-        from mmg_casadi.errors import ParameterError
         raise ParameterError("speed", "a positive fraction of the design speed", speed)
     return float(_rpm_rootfinder(ship)(ship.n_design_rpm * speed, speed))
 
@@ -379,7 +379,6 @@ def linearise(state, inputs, ship: ShipParams | None = None, steering: SteeringP
     else:
         e = np.asarray(env.vector() if hasattr(env, "vector") else env, float).ravel()
         if e.size != NENV:
-            from mmg_casadi.errors import ParameterError
             raise ParameterError("env", f"{NENV} numbers [V_c, beta_c, U_w, psi_w]", e.size)
         xdot = build_mmg(ship, steering, disturbed=True, windage=windage)(x, u[0], u[1], ca.DM(e))
     jac = ca.Function("mmg_jacobians", [x, u], [ca.jacobian(xdot, x), ca.jacobian(xdot, u)])

@@ -1,0 +1,260 @@
+"""The fleet step: one ship's step mapped over the fleet, each ship seeing a fixed number of neighbour slots.
+
+The unrolled step (:func:`~mmg_casadi.closed_loop.step.build_closed_loop_step`) writes every ship and every pair
+into one expression, so its code, compile time and compiler memory grow with the square of the fleet. The fleet
+step writes one ship once and maps it over the ships with CasADi's ``map``: its code does not depend on the
+number of ships. Each ship sees ``K = layout.neighbours`` neighbour slots, filled from a *neighbour list* (agent
+indices, ``K × N``) that the rollout computes once per chunk of steps (:func:`neighbour_lists`, a k-d tree over
+the positions, O(N log N)) and the compiled step gathers by index (parametric indexing) at every step.
+
+Exactness. The list of a ship holds, in agent order, every ship and obstacle within the *candidate radius*
+``R_safe + 2 V_max T_chunk`` at the chunk's start (``V_max`` bounds any speed over the ground, ``T_chunk`` the
+chunk's duration), so every neighbour that can come within R_safe during the chunk is in it. A method ignores
+an inactive neighbour (a masked term adds an exact zero), so a ship's guidance, rudder, engine and motion are
+those of the unrolled step to the bit as long as no more than ``K`` agents are candidates. Two differences, both
+documented: with more than ``K`` candidates the ship keeps its ``K`` nearest (:func:`neighbour_lists` counts the
+overflows), and the closest approach ``d_min`` is recorded among the candidates only (a ship that never had
+anyone within the candidate radius ends with no closest approach instead of a large one). Collisions (within
+the collision distance, far inside R_safe) are recorded exactly.
+
+Examples
+--------
+>>> lay = Layout(("modified-vortex",) * 40, n_obstacles=3, neighbours=8)
+>>> f = build_fleet_step(lay)
+>>> f.name(), f.size_in(2)
+('fleet_modifiedvortexx40_o3_w0_k2_v80huanghn8', (8, 40))
+"""
+
+from __future__ import annotations
+
+import functools
+
+import casadi as ca
+import numpy as np
+from scipy.spatial import cKDTree
+
+from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, SHIP_PARAMS, Layout
+from mmg_casadi.closed_loop.step import AUX, ENVELOPE, NAUX, _models, _ship_update
+from mmg_casadi.guidance import hazards
+from mmg_casadi.vessel import environment
+
+_ROW = ("d_min", "d_min_with", "t_collision", "collision_with")
+AGENT_ROWS = 6
+"""Rows of the agent table the slots are gathered from: position (2), velocity over the ground (2), presence,
+radius."""
+FAR = 1.0e9
+"""Position of the padding agent (index ``N + S``): never present, never near."""
+V_MAX = float(np.hypot(ENVELOPE["speed"], ENVELOPE["speed"]))
+"""Bound on a ship's speed through the water inside the model envelope (U): the candidate radius uses it."""
+
+
+def candidate_radius(r_safe: float, dt: float, chunk: int, current_speed: float = 0.0) -> float:
+    """Radius (L) within which an agent at a chunk's start can come within ``r_safe`` of a ship during the chunk.
+
+    Parameters
+    ----------
+    r_safe : float
+        The safe radius R_safe (L).
+    dt : float
+        Guidance step (L/U).
+    chunk : int
+        Steps of the chunk.
+    current_speed : float, default 0
+        Speed of a uniform current (U); it carries both ships alike, so it does not change their distance.
+
+    Examples
+    --------
+    >>> round(candidate_radius(15.0, 0.25, 4), 3)
+    23.485
+    """
+    del current_speed  # a uniform current moves every ship alike
+    return float(r_safe + 2.0 * V_MAX * dt * chunk)
+
+
+def neighbour_lists(layout: Layout, x: np.ndarray, p: np.ndarray, radius: float) -> tuple[np.ndarray, int]:
+    """The ``K × N`` neighbour list of every ship (agent indices in increasing order, padded with ``N + S``) and
+    the number of ships that had more than ``K`` candidates within ``radius`` (each keeps its ``K`` nearest).
+
+    Parameters
+    ----------
+    layout : Layout
+        A fleet layout (``layout.neighbours > 0``).
+    x : ndarray (nx,)
+        Scenario state at the chunk's start.
+    p : ndarray (np,)
+        Parameter vector.
+    radius : float
+        Candidate radius (L; :func:`candidate_radius`).
+    """
+    N, S, K = layout.n_ships, layout.n_obstacles, layout.neighbours
+    pts = np.column_stack([x[layout.rows("x")], x[layout.rows("y")]])
+    if S:
+        obs = layout.split_params(np.asarray(p, float))["obstacles"]
+        pts = np.vstack([pts, np.asarray(obs)[0:2, :].T])
+    tree = cKDTree(pts)
+    out = np.full((K, N), float(N + S))
+    overflow = 0
+    for i, cand in enumerate(tree.query_ball_point(pts[:N], r=radius)):
+        cand = [j for j in cand if j != i]
+        if len(cand) > K:
+            overflow += 1
+            d = np.hypot(*(pts[cand] - pts[i]).T)
+            cand = [cand[k] for k in np.argsort(d, kind="stable")[:K]]
+        cand.sort()
+        out[:len(cand), i] = cand
+    return out, overflow
+
+
+def _ship_symbols(layout: Layout) -> dict:
+    """Symbols of one ship's inputs to the fleet step."""
+    G = len(GLOBAL_PARAMS) + len(layout.method_inputs)
+    return {"x": ca.SX.sym("x", layout.ns), "sp": ca.SX.sym("sp", len(SHIP_PARAMS) + 2 * layout.max_path),
+            "g": ca.SX.sym("g", G), "walls": ca.SX.sym("walls", 4 * layout.n_walls),
+            "env": ca.SX.sym("env", 5 if layout.disturbed else 0), "t": ca.SX.sym("t"),
+            "nb": ca.SX.sym("nb", AGENT_ROWS * layout.neighbours)}
+
+
+def _ship_context(layout: Layout, sym: dict) -> tuple[dict, dict]:
+    """The one-ship context of :func:`~mmg_casadi.closed_loop.step._ship_update` (the same expressions as the
+    unrolled step's for that ship)."""
+    names = GLOBAL_PARAMS + layout.method_inputs
+    P = {name: sym["g"][k] for k, name in enumerate(names)}
+    sp = sym["sp"]
+    Pi = {name: sp[k] for k, name in enumerate(SHIP_PARAMS)}
+    Pi["path"] = ca.reshape(sp[len(SHIP_PARAMS):], 2, layout.max_path)
+    P["ships"] = [Pi]
+    P["obstacles"] = ca.SX(3, 0)
+    P["walls"] = ca.reshape(sym["walls"], 4, layout.n_walls)
+    S_ = {name: layout.column(name) for name in layout.ship_state}
+    Xi, t = sym["x"], sym["t"]
+    E, env_args = None, ()
+    vel = ca.vertcat(Xi[S_["u"]] * ca.cos(Xi[S_["psi"]]) - Xi[S_["v"]] * ca.sin(Xi[S_["psi"]]),
+                     Xi[S_["u"]] * ca.sin(Xi[S_["psi"]]) + Xi[S_["v"]] * ca.cos(Xi[S_["psi"]]))
+    if layout.disturbed:
+        E = sym["env"]
+        P["env"] = E
+        env_args = (E[0:4],)
+        vel = ca.vertcat(*environment.velocity_over_ground(Xi[S_["u"]], Xi[S_["v"]], Xi[S_["psi"]], E[0], E[1]))
+    running = t < P["t_max"] - 1e-9
+    present = ca.if_else(Xi[S_["status"]] == 0, 1, ca.if_else(Xi[S_["status"]] == 1, Pi["stays"], 0))
+    c = {"P": P, "S": S_, "t": t, "X": [Xi], "pos": [ca.vertcat(Xi[S_["x"]], Xi[S_["y"]])], "psi": [Xi[S_["psi"]]],
+         "vel": [vel], "E": E, "env_args": env_args, "running": running,
+         "sailing": [ca.logic_and(Xi[S_["status"]] == 0, running)], "present": [present]}
+    return c, S_
+
+
+def _combos(layout: Layout) -> list[tuple[str, str]]:
+    """The (method, vessel) pairs of the fleet, in first-appearance order."""
+    return list(dict.fromkeys((layout.methods[i], layout.vessel(i)) for i in range(layout.n_ships)))
+
+
+@functools.lru_cache(maxsize=16)
+def _ship_functions(layout: Layout) -> dict:
+    """Per-ship Functions of the fleet step: prelude, update (one per (method, vessel)), hold, bookkeeping."""
+    K, W = layout.neighbours, layout.n_walls
+    sym = _ship_symbols(layout)
+    c, S_ = _ship_context(layout, sym)
+    args = [sym[k] for k in ("x", "sp", "g", "walls", "env", "t", "nb")]
+    key = layout.key()
+    pre = ca.Function(f"fleet_pre_{key}", args[:6], [ca.vertcat(c["pos"][0], c["vel"][0], c["present"][0]),
+                                                     c["sailing"][0]], {"cse": True})
+    nb = ca.reshape(sym["nb"], AGENT_ROWS, K)
+    slots = (nb[0:2, :], nb[2:4, :], nb[5:6, :], nb[4:5, :])
+    mmgs = _models(layout)
+    updates = []
+    for n, (method, vessel) in enumerate(_combos(layout)):
+        new, aux = _ship_update(layout, 0, c, mmgs[vessel], 1, sparse=True, nb=slots, method=method)
+        updates.append(ca.Function(f"fleet_sail{n}_{key}", args, [new, aux], {"cse": True}))
+    hold = ca.Function(f"fleet_hold_{key}", args, [sym["x"], ca.DM.nan(NAUX, 1)])
+    # bookkeeping: closest approach among the slots and first collision with a slot or a wall, after the step
+    xn, nb_vec, nb_idx = ca.SX.sym("xn", layout.ns), ca.SX.sym("nb_next", 3 * K), ca.SX.sym("nb_idx", K)
+    nb_next = ca.reshape(nb_vec, 3, K)
+    P, t = c["P"], sym["t"]
+    pos_n = ca.vertcat(xn[S_["x"]], xn[S_["y"]])
+    d_min, d_with = xn[S_["d_min"]], xn[S_["d_min_with"]]
+    t_col, c_with = xn[S_["t_collision"]], xn[S_["collision_with"]]
+    counts_i, running = c["present"][0], c["running"]
+    for k in range(K):
+        dij = ca.norm_2(pos_n - nb_next[0:2, k])
+        valid = ca.logic_and(ca.logic_and(counts_i, nb_next[2, k]), running)
+        closer = ca.logic_and(valid, dij < d_min)
+        d_min = ca.if_else(closer, dij, d_min)
+        d_with = ca.if_else(closer, nb_idx[k], d_with)
+        hit = ca.logic_and(ca.logic_and(valid, dij < P["collision_distance"]), t_col < 0)
+        t_col = ca.if_else(hit, t + P["dt"], t_col)
+        c_with = ca.if_else(hit, nb_idx[k], c_with)
+    wall = hazards.KINDS["wall"]
+    for k in range(W):
+        d = wall.distance(pos_n, P["walls"][:, k])
+        hit = ca.logic_and(ca.logic_and(ca.logic_and(counts_i, running), d < P["ships"][0]["half_beam"]), t_col < 0)
+        t_col = ca.if_else(hit, t + P["dt"], t_col)
+        c_with = ca.if_else(hit, layout.n_ships + layout.n_obstacles + k, c_with)
+    r0, r1 = layout.column(_ROW[0]), layout.column(_ROW[-1]) + 1
+    book_args = [sym["x"], sym["sp"], sym["g"], sym["walls"], sym["t"], xn, nb_vec, nb_idx]
+    meet = ca.Function(f"fleet_meet_{key}", book_args, [ca.vertcat(d_min, d_with, t_col, c_with)], {"cse": True})
+    keep = ca.Function(f"fleet_keep_{key}", book_args, [xn[r0:r1]])
+    return {"pre": pre, "updates": updates, "hold": hold, "meet": meet, "keep": keep}
+
+
+def _gather(table, nbr, rows: int):
+    """Columns ``nbr`` (``K × N`` agent indices) of ``table`` (``rows × agents``) as ``(rows K) × N``."""
+    K, N = nbr.size1(), nbr.size2()
+    index = ca.repmat(rows * ca.reshape(nbr, 1, K * N), rows, 1) + ca.repmat(ca.DM(list(range(rows))), 1, K * N)
+    return ca.reshape(ca.vec(table)[index], rows * K, N)
+
+
+@functools.lru_cache(maxsize=16)
+def build_fleet_step(layout: Layout) -> ca.Function:
+    """Named Function ``fleet_<key>(x, p, nbr) -> (x_next, aux)``: the closed-loop step of a fleet layout, one
+    ship's step mapped over the ships (see the module docstring).
+
+    ``nbr`` (``K × N``) is the neighbour list of :func:`neighbour_lists`; ``x``, ``p``, ``x_next`` and ``aux``
+    are laid out as for the unrolled step.
+
+    Parameters
+    ----------
+    layout : Layout
+        A fleet layout (``layout.neighbours > 0``, exact: ``smooth`` is None).
+    """
+    if layout.neighbours < 1 or layout.smooth is not None:
+        raise ValueError(f"a fleet step needs neighbours >= 1 and an exact layout, got {layout}")
+    N, S, K, ns = layout.n_ships, layout.n_obstacles, layout.neighbours, layout.ns
+    f = _ship_functions(layout)
+    key = layout.key()
+    x, p, nbr = ca.MX.sym("x", layout.nx), ca.MX.sym("p", layout.np), ca.MX.sym("nbr", K, N)
+    G0, nsp = len(GLOBAL_PARAMS), len(SHIP_PARAMS) + 2 * layout.max_path
+    t, X = x[0], ca.reshape(x[1:], ns, N)
+    SP = ca.reshape(p[G0:G0 + N * nsp], nsp, N)
+    off = G0 + N * nsp
+    obs = ca.reshape(p[off:off + 3 * S], 3, S)
+    off += 3 * S
+    walls = p[off:off + 4 * layout.n_walls]
+    off += 4 * layout.n_walls
+    env = p[off:off + 5] if layout.disturbed else ca.MX(0, 1)
+    off += 5 if layout.disturbed else 0
+    g = ca.vertcat(p[0:G0], p[off:])
+    shared, sailing = f["pre"].map(N)(X, SP, g, walls, env, t)
+    radius = p[GLOBAL_PARAMS.index("ship_radius")]
+    pad = ca.DM([FAR, FAR, 0.0, 0.0, 0.0, 0.0])
+    table = ca.horzcat(ca.vertcat(shared, ca.repmat(radius, 1, N)),
+                       ca.vertcat(obs[0:2, :], ca.MX.zeros(2, S), ca.MX.ones(1, S), obs[2:3, :]), pad)
+    NB = _gather(table, nbr, AGENT_ROWS)
+    combo_of = {cv: n for n, cv in enumerate(_combos(layout))}
+    combo = ca.DM([[combo_of[(layout.methods[i], layout.vessel(i))] for i in range(N)]])
+    which = ca.if_else(sailing, ca.repmat(combo, 1, 1), -1)
+    ship = ca.Function.conditional(f"fleet_ship_{key}", f["updates"], f["hold"])
+    new, aux = ship.map(N)(which, X, SP, g, walls, env, t, NB)
+    # closest approach and collisions, from the positions after the step, for ships present at its start
+    rows_xy = [layout.column("x"), layout.column("y")]
+    after = ca.horzcat(ca.vertcat(new[rows_xy, :], shared[4, :]),
+                       ca.vertcat(obs[0:2, :], ca.MX.ones(1, S)), ca.DM([FAR, FAR, 0.0]))
+    NB3 = _gather(after, nbr, 3)
+    running = t < p[GLOBAL_PARAMS.index("t_max")] - 1e-9
+    counts = ca.logic_and(shared[4, :], running)
+    row = ca.Function.conditional(f"fleet_row_{key}", [f["keep"]], f["meet"])
+    rows = row.map(N)(counts, X, SP, g, walls, t, new, NB3, nbr)
+    r0, r1 = layout.column(_ROW[0]), layout.column(_ROW[-1]) + 1
+    X_next = ca.vertcat(new[:r0, :], rows, new[r1:, :])
+    clock = ca.if_else(running, t + p[GLOBAL_PARAMS.index("dt")], t)
+    return ca.Function(f"fleet_{key}", [x, p, nbr], [ca.vertcat(clock, ca.vec(X_next)), aux],
+                       ["x", "p", "nbr"], ["x_next", "aux"])

@@ -1,0 +1,253 @@
+"""Everything the rule checks need about one encounter of an ordered pair (own, other), in one object.
+
+The **baseline** of each ship is the sample whose heading and speed describe her before any action for this
+encounter. It is the onset of risk, unless the ship altered course or speed during the ``t_lookback`` before it in
+a way that opened the predicted CPA (an avoiding manoeuvre already under way): then it is the sample
+``t_lookback`` before the onset. The encounter is classified with the baselines' headings and speeds and the
+positions at the onset (:func:`mmg_casadi.colregs.roles.classify_roles`), so a ship already turning for the other
+when the risk begins keeps the role she had, and a give-way ship's action is measured from her baseline, so an
+alteration made before the onset counts as action. A course change that closed the CPA (a turn onto a new leg that
+created the risk) does not move the baseline.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mmg_casadi.colregs.kinematics import ground_velocity, pair_geometry
+from mmg_casadi.colregs.risk import RiskEpisode, first_trigger, release_range, risk_episodes, risk_of_collision
+from mmg_casadi.colregs.roles import classify_roles
+from mmg_casadi.colregs.score import cpa_tcpa
+
+#: a counterfactual CPA must be this much smaller (L) for a pre-onset change to count as an avoiding manoeuvre
+CPA_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class EncounterContext:
+    """Arrays and sample indices of one encounter, as seen from the own ship.
+
+    Parameters
+    ----------
+    t : numpy.ndarray (T,)
+        Sample times (L/U).
+    pos, psi, speed : numpy.ndarray
+        Own positions (T, 2), headings (T,) and speeds over the ground (T,).
+    pos_other, psi_other, speed_other : numpy.ndarray
+        The other ship's positions (T, 2), headings (T,) and speeds over the ground (T,).
+    range, beta, alpha, cpa_pred, tcpa_pred : numpy.ndarray (T,)
+        Relative geometry (:class:`~mmg_casadi.colregs.kinematics.PairGeometry`).
+    risk : numpy.ndarray of bool (T,)
+        The Rule 7 gate.
+    episode : RiskEpisode
+        Onset, CPA and release samples.
+    base, base_other : int
+        Baseline samples of the own and the other ship (module docstring).
+    end : int
+        Last sample of the encounter's aftermath (before the next encounter of the pair or the end), for Rule 13.
+    late, must : int or None
+        Samples where the give-way ship's ample time ends (risk at ``late_tcpa``/``late_range``) and where the
+        stand-on ship must act (risk and a predicted CPA below ``d_safe`` at ``must_tcpa``/``must_range``:
+        collision can no longer be avoided by the give-way ship alone).
+    role : str
+        The own ship's role (:data:`~mmg_casadi.colregs.roles.ROLES`).
+    bearing, contact : float
+        β and α the role was classified with: positions at the onset, headings at the baselines (rad).
+    speed_ref, speed_max : float
+        Own speed reference for reductions (the highest from baseline to onset) and the highest speed she sailed
+        before the onset (only speed above it is an increase).
+    profile : ScoringProfile
+        Thresholds.
+
+    Examples
+    --------
+    The paper's crossing, both ships holding course (:func:`first_encounter`):
+
+    >>> from mmg_casadi.colregs.profiles import iitm_lab
+    >>> t = np.arange(0.0, 40.0, 0.25)
+    >>> ctx = first_encounter(t, np.column_stack([t, 0 * t]), 0 * t, np.column_stack([25 + 0 * t, 25 - t]),
+    ...                       -np.pi / 2 + 0 * t, iitm_lab())
+    >>> ctx.role, ctx.at(ctx.episode.onset), ctx.at(ctx.late), ctx.at(ctx.must), ctx.cpa
+    ('give-way', 14.5, 21.0, 23.0, 0.0)
+    """
+
+    t: np.ndarray
+    pos: np.ndarray
+    psi: np.ndarray
+    speed: np.ndarray
+    pos_other: np.ndarray
+    psi_other: np.ndarray
+    speed_other: np.ndarray
+    range: np.ndarray
+    beta: np.ndarray
+    alpha: np.ndarray
+    cpa_pred: np.ndarray
+    tcpa_pred: np.ndarray
+    risk: np.ndarray
+    episode: RiskEpisode
+    base: int
+    base_other: int
+    end: int
+    late: int | None
+    must: int | None
+    role: str
+    bearing: float
+    contact: float
+    speed_ref: float
+    speed_max: float
+    profile: object
+
+    @property
+    def cpa(self) -> float:
+        """The actual CPA (L): the smallest range from onset to release."""
+        return float(self.range[self.episode.cpa])
+
+    def at(self, k) -> float | None:
+        """The time of sample ``k`` (``None`` for ``None``).
+
+        Parameters
+        ----------
+        k : int or None
+            Sample index.
+        """
+        return None if k is None else float(self.t[k])
+
+
+def baselines(t, onset, run_start, pos, vel, pos_other, vel_other, t_lookback) -> tuple[int, int]:
+    """Baseline samples of the own and the other ship (module docstring).
+
+    Parameters
+    ----------
+    t : array-like (T,)
+        Sample times.
+    onset : int
+        Onset of risk.
+    run_start : int
+        First sample of the stretch, ending at the onset, in which both ships sail.
+    pos, pos_other : array-like (T, 2)
+        Positions.
+    vel, vel_other : array-like (T, 2)
+        Velocities over the ground.
+    t_lookback : float
+        Look-back time (L/U).
+
+    Examples
+    --------
+    The own ship turned away during the look-back (the CPA opened), the other held her course:
+
+    >>> t = np.arange(6.0)
+    >>> vel = np.array([[1.0, 0.0]] * 3 + [[0.9, 0.4]] * 3); vel_o = np.tile([-1.0, 0.0], (6, 1))
+    >>> baselines(t, 5, 0, np.zeros((6, 2)), vel, np.tile([20.0, 0.5], (6, 1)), vel_o, 4.0)
+    (1, 5)
+    """
+    t = np.asarray(t, dtype=float)
+    look = max(int(np.searchsorted(t, t[onset] - t_lookback - 1e-9)), run_start)
+    rel = np.asarray(pos_other, dtype=float)[onset] - np.asarray(pos, dtype=float)[onset]
+    vel, vel_other = np.asarray(vel, dtype=float), np.asarray(vel_other, dtype=float)
+    now = float(cpa_tcpa(rel, vel_other[onset] - vel[onset])[0])
+    own_before = float(cpa_tcpa(rel, vel_other[onset] - vel[look])[0])
+    other_before = float(cpa_tcpa(rel, vel_other[look] - vel[onset])[0])
+    return (look if own_before < now - CPA_TOLERANCE else onset,
+            look if other_before < now - CPA_TOLERANCE else onset)
+
+
+def encounter_context(t, own, other, geometry, risk, episode, run_start, end, profile) -> EncounterContext:
+    """Build the :class:`EncounterContext` of one encounter.
+
+    Parameters
+    ----------
+    t : numpy.ndarray (T,)
+        Sample times.
+    own, other : dict
+        Per ship ``pos`` (T, 2), ``psi`` (T,), ``vel`` (T, 2), ``speed`` (T,) and ``active`` (T,) arrays.
+    geometry : PairGeometry
+        Relative geometry of (own, other) at every sample.
+    risk : numpy.ndarray of bool (T,)
+        The Rule 7 gate.
+    episode : RiskEpisode
+        The encounter's samples.
+    run_start : int
+        First sample of the both-sailing stretch that contains the onset.
+    end : int
+        Last sample of the aftermath (Rule 13).
+    profile : ScoringProfile
+        Thresholds.
+
+    Examples
+    --------
+    >>> from mmg_casadi.colregs.profiles import iitm_lab
+    >>> t = np.arange(0.0, 40.0, 0.25)
+    >>> ships = [{"pos": p, "psi": np.full(t.size, h), "vel": ground_velocity(t, p), "speed": np.ones(t.size),
+    ...           "active": np.ones(t.size, bool)}
+    ...          for p, h in ((np.column_stack([t, 0 * t]), 0.0), (np.column_stack([50 - t, 0 * t + 1]), np.pi))]
+    >>> g = pair_geometry(ships[0]["pos"], ships[0]["psi"], ships[1]["pos"], ships[1]["psi"], ships[0]["vel"],
+    ...                   ships[1]["vel"])
+    >>> risk = risk_of_collision(g.cpa, g.tcpa, g.range, True, iitm_lab())
+    >>> episode = risk_episodes(g.range, g.tcpa, risk, np.ones(t.size, bool), 15.0)[0]
+    >>> encounter_context(t, ships[0], ships[1], g, risk, episode, 0, t.size - 1, iitm_lab()).role
+    'head-on'
+    """
+    k0 = episode.onset
+    base, base_other = baselines(t, k0, run_start, own["pos"], own["vel"], other["pos"], other["vel"],
+                                 profile.t_lookback)
+    beta = pair_geometry(own["pos"][k0], own["psi"][base], other["pos"][k0], other["psi"][k0], own["vel"][k0],
+                         other["vel"][k0]).beta
+    alpha = pair_geometry(other["pos"][k0], other["psi"][base_other], own["pos"][k0], own["psi"][k0],
+                          other["vel"][k0], own["vel"][k0]).beta
+    role = str(classify_roles(beta, alpha, own["psi"][base], other["psi"][base_other], own["speed"][base],
+                              other["speed"][base_other], profile))
+    before = np.flatnonzero(own["active"][:k0 + 1])
+    g = geometry
+    late = first_trigger(risk, g.tcpa, g.range, k0, episode.cpa, profile.late_tcpa, profile.late_range)
+    must = first_trigger(risk & (g.cpa < profile.d_safe), g.tcpa, g.range, k0, episode.cpa, profile.must_tcpa,
+                         profile.must_range)
+    return EncounterContext(
+        t=t, pos=own["pos"], psi=own["psi"], speed=own["speed"], pos_other=other["pos"], psi_other=other["psi"],
+        speed_other=other["speed"],
+        range=g.range, beta=g.beta, alpha=g.alpha, cpa_pred=g.cpa, tcpa_pred=g.tcpa, risk=risk, episode=episode,
+        base=base, base_other=base_other, end=end, late=late, must=must, role=role, bearing=float(beta),
+        contact=float(alpha),
+        speed_ref=float(np.max(own["speed"][base:k0 + 1])), speed_max=float(np.max(own["speed"][before])),
+        profile=profile)
+
+
+def first_encounter(t, pos_own, psi_own, pos_other, psi_other, profile) -> EncounterContext | None:
+    """The first encounter of (own, other) sailing throughout, speeds over the ground from the positions; ``None``
+    without a risk of collision. A shortcut for examples and checks; :func:`mmg_casadi.colregs.scorer.score_encounters`
+    scores every encounter of every pair.
+
+    Parameters
+    ----------
+    t : array-like (T,)
+        Sample times (L/U).
+    pos_own, pos_other : array-like (T, 2)
+        Positions (L).
+    psi_own, psi_other : array-like (T,)
+        Headings (rad).
+    profile : ScoringProfile
+        Thresholds.
+
+    Examples
+    --------
+    >>> from mmg_casadi.colregs.profiles import iitm_lab
+    >>> t = np.arange(0.0, 40.0, 0.25)
+    >>> first_encounter(t, np.column_stack([t, 0 * t]), 0 * t, np.column_stack([t, 0 * t + 5]), 0 * t, iitm_lab())
+    """
+    t = np.asarray(t, dtype=float)
+    ships = []
+    for pos, psi in ((pos_own, psi_own), (pos_other, psi_other)):
+        pos = np.asarray(pos, dtype=float)
+        vel = ground_velocity(t, pos)
+        ships.append({"pos": pos, "psi": np.asarray(psi, dtype=float), "vel": vel,
+                      "speed": np.hypot(vel[:, 0], vel[:, 1]), "active": np.ones(t.size, dtype=bool)})
+    g = pair_geometry(ships[0]["pos"], ships[0]["psi"], ships[1]["pos"], ships[1]["psi"], ships[0]["vel"],
+                      ships[1]["vel"])
+    both = np.ones(t.size, dtype=bool)
+    risk = risk_of_collision(g.cpa, g.tcpa, g.range, both, profile)
+    episodes = risk_episodes(g.range, g.tcpa, risk, both, release_range(profile))
+    if not episodes:
+        return None
+    end = episodes[1].onset - 1 if len(episodes) > 1 else t.size - 1
+    return encounter_context(t, ships[0], ships[1], g, risk, episodes[0], 0, end, profile)

@@ -1,0 +1,79 @@
+"""Encounter type and role of a ship at the onset of risk, from the bearing β and the contact angle α (numpy).
+
+With β the bearing of the other ship from the own bow and α the bearing of the own ship from the other's bow
+(both in [−π, π), positive to starboard) and the profile's sectors
+(:class:`~mmg_casadi.colregs.profiles.ScoringProfile`), the own ship is, in this order:
+
+1. **overtaking** if she lies in the other's stern sector (``|α| > stern_deg``, COLREG Rule 13(b): more than
+   22.5° abaft her beam), is the faster ship and, if the profile sets ``overtaking_bow_deg``, has the other within
+   that angle of her bow (``|β|``);
+2. **overtaken** in the mirror case (``|β| > stern_deg``, the other faster, ``|α|`` within the bow angle);
+3. **head-on** if ``|α| < head_on_deg`` and ``|β| < head_on_deg`` (and, if the profile sets
+   ``head_on_heading_deg``, the courses are within that angle of reciprocal);
+4. otherwise crossing: **give-way** with the other ship on her starboard side (β > 0; Rule 15),
+   **stand-on** with the other on her port side (β ≤ 0; Rule 17). Crossings at small angles are crossings.
+
+The roles of the two ships of a pair on a collision course are complementary (head-on/head-on, give-way/stand-on,
+overtaking/overtaken): on a collision course β and α have opposite signs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mmg_casadi.colregs.geometry import wrap_to_pi
+
+#: the roles a ship can have in an encounter
+ROLES = ("head-on", "give-way", "stand-on", "overtaking", "overtaken")
+#: the encounter type of each role
+ENCOUNTER_OF_ROLE = {"head-on": "head-on", "give-way": "crossing", "stand-on": "crossing",
+                     "overtaking": "overtaking", "overtaken": "overtaking"}
+#: roles that must keep out of the way or alter course (Rules 13, 14, 15, 16)
+GIVE_WAY_ROLES = ("head-on", "give-way", "overtaking")
+#: roles that keep course and speed (Rule 17)
+STAND_ON_ROLES = ("stand-on", "overtaken")
+
+
+def classify_roles(beta, alpha, psi_own, psi_other, speed_own, speed_other, profile) -> np.ndarray:
+    """The own ship's role (one of :data:`ROLES`), elementwise over arrays of one shape (module docstring).
+
+    Parameters
+    ----------
+    beta, alpha : array-like
+        Bearing of the other ship from the own bow and contact angle (rad, positive to starboard).
+    psi_own, psi_other : array-like
+        Headings (rad).
+    speed_own, speed_other : array-like
+        Speeds over the ground.
+    profile : ScoringProfile
+        ``head_on_deg``, ``head_on_heading_deg``, ``stern_deg`` and ``overtaking_bow_deg``.
+
+    Returns
+    -------
+    numpy.ndarray of str
+
+    Examples
+    --------
+    >>> from mmg_casadi.colregs.profiles import iitm_lab
+    >>> d = np.radians
+    >>> classify_roles(d([0, 45, -45, 0, 170, 10]), d([0, -45, 45, 170, 0, -8]), d([0, 0, 0, 0, 0, 0]),
+    ...                d([180, -90, 90, 0, 0, -20]), [1, 1, 1, 1, 0.5, 1], [1, 1, 1, 0.5, 1, 1], iitm_lab()).tolist()
+    ['head-on', 'give-way', 'stand-on', 'overtaking', 'overtaken', 'give-way']
+    """
+    beta, alpha = np.asarray(beta, dtype=float), np.asarray(alpha, dtype=float)
+    shape = np.broadcast(beta, alpha, np.asarray(psi_own), np.asarray(psi_other), np.asarray(speed_own),
+                         np.asarray(speed_other)).shape
+    faster = np.asarray(speed_own, dtype=float) > np.asarray(speed_other, dtype=float)
+    slower = np.asarray(speed_own, dtype=float) < np.asarray(speed_other, dtype=float)
+    stern = np.radians(profile.stern_deg)
+    bow = np.inf if profile.overtaking_bow_deg is None else np.radians(profile.overtaking_bow_deg)
+    overtaking = (np.abs(alpha) > stern) & faster & (np.abs(beta) < bow)
+    overtaken = (np.abs(beta) > stern) & slower & (np.abs(alpha) < bow)
+    limit = np.radians(profile.head_on_deg)
+    head_on = (np.abs(alpha) < limit) & (np.abs(beta) < limit)
+    if profile.head_on_heading_deg is not None:
+        reciprocal = np.abs(wrap_to_pi(np.asarray(psi_own, dtype=float) - np.asarray(psi_other, dtype=float) - np.pi))
+        head_on = head_on & (reciprocal < np.radians(profile.head_on_heading_deg))
+    crossing = np.where(beta > 0.0, "give-way", "stand-on")
+    role = np.select([overtaking, overtaken, head_on], ["overtaking", "overtaken", "head-on"], crossing)
+    return np.broadcast_to(role, shape).astype(str)

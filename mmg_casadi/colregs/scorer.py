@@ -1,0 +1,238 @@
+"""COLREG encounter scorer: per ordered ship pair, the encounters with a risk of collision and every rule's verdict
+and graded score (numpy, vectorised over the stored trajectory).
+
+:func:`score_encounters` is the entry point. For every ordered pair (own, other):
+
+1. Rule 7 gate (:mod:`mmg_casadi.colregs.risk`): no risk of collision while both sail → one :class:`Encounter`
+   with ``applicable = False`` (no rule applies: neither a violation nor a compliance); otherwise one applicable
+   :class:`Encounter` per stretch of risk, from its onset to its release;
+2. classification at the onset, fixed for the encounter (:mod:`mmg_casadi.colregs.roles`,
+   :mod:`mmg_casadi.colregs.context`): type ``head-on``, ``crossing`` or ``overtaking`` and the own ship's role;
+3. rules of the role (:mod:`mmg_casadi.colregs.give_way_rules`, :mod:`mmg_casadi.colregs.stand_on_rules`): Rules
+   8, 13, 14, 15, 16, 17(a)(i), 17(a)(ii), 17(b), 17(c), each a :class:`~mmg_casadi.colregs.verdict.RuleResult`;
+4. several ships (:mod:`mmg_casadi.colregs.duties`): conflicting duties flagged (Rule 2(b)); 17(a)(i) excused
+   while a give-way duty to another ship is open.
+
+An encounter's ``score`` is the mean of its rules' scores, ``compliant`` whether every applicable rule is kept.
+Thresholds: a :class:`~mmg_casadi.colregs.profiles.ScoringProfile` (``iitm-lab`` by default, or ``ntnu-2023``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mmg_casadi.colregs.context import encounter_context
+from mmg_casadi.colregs.duties import Duty, conflicts, excused_samples
+from mmg_casadi.colregs.give_way_rules import give_way_rules
+from mmg_casadi.colregs.kinematics import PairGeometry, ground_velocity, pair_geometry
+from mmg_casadi.colregs.profiles import scoring_profile
+from mmg_casadi.colregs.risk import release_range, risk_episodes, risk_of_collision
+from mmg_casadi.colregs.roles import ENCOUNTER_OF_ROLE, GIVE_WAY_ROLES
+from mmg_casadi.colregs.stand_on_rules import stand_on_rules
+from mmg_casadi.colregs.verdict import RULES, json_value
+
+
+@dataclass(frozen=True)
+class Encounter:
+    """One encounter of an ordered ship pair, from the own ship's side.
+
+    Parameters
+    ----------
+    own, other : int
+        Ship indices.
+    own_name, other_name : str
+        Ship names.
+    profile : str
+        Name of the scoring profile.
+    applicable : bool
+        Whether a risk of collision existed (otherwise no rule applies and the fields below are empty).
+    encounter : str or None
+        ``"head-on"``, ``"crossing"`` or ``"overtaking"``.
+    role : str or None
+        The own ship's role: ``"head-on"``, ``"give-way"``, ``"stand-on"``, ``"overtaking"`` or ``"overtaken"``.
+    onset, release, closest : dict or None
+        Onset of risk (``t``, ``range``, ``cpa``, ``tcpa``), release (``t``, ``range``) and the actual closest point
+        of approach (``t``, ``range``).
+    rules : dict
+        ``{rule: RuleResult}`` for the rules that apply (keys of :data:`~mmg_casadi.colregs.verdict.RULES`).
+    conflicts_with : tuple of str
+        Ships towards which the own ship had an open duty of the other kind at the same time (Rule 2(b)).
+    quantities : dict
+        The classification and timing quantities (bearings, speeds, baseline, ample time, must-act time, ...).
+
+    Examples
+    --------
+    >>> e = Encounter(0, 1, "own", "target", "iitm-lab", False)
+    >>> e.score, e.compliant, e.to_dict()["applicable"]
+    (None, None, False)
+    """
+
+    own: int
+    other: int
+    own_name: str
+    other_name: str
+    profile: str
+    applicable: bool
+    encounter: str | None = None
+    role: str | None = None
+    onset: dict | None = None
+    release: dict | None = None
+    closest: dict | None = None
+    rules: dict = field(default_factory=dict)
+    conflicts_with: tuple = ()
+    quantities: dict = field(default_factory=dict)
+
+    @property
+    def score(self) -> float | None:
+        """Mean of the applicable rules' scores (``None`` if none applies)."""
+        return float(np.mean([r.score for r in self.rules.values()])) if self.rules else None
+
+    @property
+    def compliant(self) -> bool | None:
+        """Whether every applicable rule is kept (``None`` if none applies)."""
+        return all(r.verdict for r in self.rules.values()) if self.rules else None
+
+    @property
+    def conflicting_duties(self) -> bool:
+        """Whether the own ship had conflicting duties during this encounter (Rule 2(b))."""
+        return bool(self.conflicts_with)
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict for ``metrics.json``: identity, applicable, onset, type, role, per-rule verdict/score
+        (``None`` for a rule that does not apply), total score, compliance and the quantities."""
+        return json_value({
+            "own": self.own_name, "other": self.other_name, "profile": self.profile, "applicable": self.applicable,
+            "encounter": self.encounter, "role": self.role, "onset": self.onset, "release": self.release,
+            "closest": self.closest, "score": self.score, "compliant": self.compliant,
+            "conflicting_duties": self.conflicting_duties, "conflicts_with": list(self.conflicts_with),
+            "rules": {r: (self.rules[r].to_dict() if r in self.rules else None) for r in RULES},
+            "quantities": self.quantities})
+
+
+def _as_arrays(t, pos, psi, speed, active):
+    """Validated ``t`` (T,), ``pos`` (T, N, 2), ``psi`` (T, N), velocity, ``speed`` (T, N), ``active`` (T, N)."""
+    t = np.asarray(t, dtype=float).ravel()
+    pos = np.asarray(pos, dtype=float)
+    n = pos.shape[1] if pos.ndim == 3 else -1
+    if pos.shape != (t.size, n, 2):
+        raise ValueError(f"pos: expected shape ({t.size}, N, 2) like t, got {pos.shape}")
+    psi = np.asarray(psi, dtype=float)
+    if psi.shape != (t.size, n):
+        raise ValueError(f"psi: expected shape ({t.size}, {n}), got {psi.shape}")
+    vel = ground_velocity(t, pos)
+    speed = np.linalg.norm(vel, axis=2) if speed is None else np.asarray(speed, dtype=float)
+    active = np.ones((t.size, n), dtype=bool) if active is None else np.asarray(active, dtype=bool)
+    for name, a in (("speed", speed), ("active", active)):
+        if a.shape != (t.size, n):
+            raise ValueError(f"{name}: expected shape ({t.size}, {n}), got {a.shape}")
+    return t, pos, psi, vel, speed, active
+
+
+def _run_start(both, k) -> int:
+    """First sample of the stretch of ``both`` that contains sample ``k``."""
+    gaps = np.flatnonzero(~both[:k])
+    return int(gaps[-1]) + 1 if gaps.size else 0
+
+
+def _times(ctx) -> tuple[dict, dict, dict]:
+    """Onset (time, range, predicted CPA and TCPA), release and actual CPA (time, range) of an encounter."""
+    e = ctx.episode
+    onset = {"t": ctx.at(e.onset), "range": ctx.range[e.onset], "cpa": ctx.cpa_pred[e.onset],
+             "tcpa": ctx.tcpa_pred[e.onset]}
+    return (onset, {"t": ctx.at(e.release), "range": ctx.range[e.release]},
+            {"t": ctx.at(e.cpa), "range": ctx.range[e.cpa]})
+
+
+def _quantities(ctx) -> dict:
+    """Classification and timing quantities of an encounter (bearings in degrees, times in L/U)."""
+    k0 = ctx.episode.onset
+    return {"t_baseline": ctx.at(ctx.base), "t_baseline_other": ctx.at(ctx.base_other),
+            "beta_deg": float(np.degrees(ctx.bearing)), "alpha_deg": float(np.degrees(ctx.contact)),
+            "beta_onset_deg": float(np.degrees(ctx.beta[k0])), "alpha_onset_deg": float(np.degrees(ctx.alpha[k0])),
+            "speed": float(ctx.speed[ctx.base]), "speed_other": float(ctx.speed_other[ctx.base_other]),
+            "t_late": ctx.at(ctx.late), "t_must": ctx.at(ctx.must), "speed_max_before": ctx.speed_max}
+
+
+def score_encounters(t, pos, psi, speed=None, active=None, profile=None, *, names=None, own=None) -> list[Encounter]:
+    """Every encounter of every ordered ship pair, scored rule by rule (module docstring).
+
+    Parameters
+    ----------
+    t : array-like (T,)
+        Sample times (L/U), increasing.
+    pos : array-like (T, N, 2)
+        Positions of the N ships (L).
+    psi : array-like (T, N)
+        Headings (rad, from x towards y; wrapped or continuous).
+    speed : array-like (T, N), optional
+        Speeds over the ground; default: from the positions.
+    active : array-like of bool (T, N), optional
+        Whether each ship sails (default: always); a pair is judged only where both sail.
+    profile : ScoringProfile or str, optional
+        Thresholds or a profile name (default ``"iitm-lab"``).
+    names : sequence of str, optional
+        Ship names (default ``ship0``, ``ship1``, ...).
+    own : int or sequence of int, optional
+        Score only the encounters of these own ships (default: all).
+
+    Returns
+    -------
+    list of Encounter
+        Ordered by own ship, other ship and onset.
+
+    Examples
+    --------
+    The paper's crossing with both ships holding course: the give-way ship fails Rules 8, 15 and 16; the stand-on
+    ship keeps her course (17(a)(i)) but does not act when she must (17(b)).
+
+    >>> t = np.arange(0.0, 40.0, 0.25)
+    >>> pos = np.stack([np.column_stack([t, 0 * t]), np.column_stack([25 + 0 * t, 25 - t])], axis=1)
+    >>> psi = np.column_stack([0 * t, -np.pi / 2 + 0 * t])
+    >>> a, b = score_encounters(t, pos, psi)
+    >>> a.role, a.onset["t"], {r: v.verdict for r, v in a.rules.items()}
+    ('give-way', 14.5, {'8': False, '16': False, '15': False})
+    >>> b.role, {r: v.verdict for r, v in b.rules.items()}
+    ('stand-on', {'17a_i': True, '17b': False, '8': True})
+    """
+    profile = scoring_profile(profile)
+    t, pos, psi, vel, speed, active = _as_arrays(t, pos, psi, speed, active)
+    n = pos.shape[1]
+    names = [f"ship{i}" for i in range(n)] if names is None else [str(x) for x in names]
+    rows = list(range(n)) if own is None else [int(i) for i in np.atleast_1d(own)]
+    if any(not 0 <= i < n for i in rows):
+        raise ValueError(f"own: expected ship indices in [0, {n}), got {own}")
+    g = pair_geometry(pos[:, rows, None, :], psi[:, rows, None], pos[:, None, :, :], psi[:, None, :],
+                      vel[:, rows, None, :], vel[:, None, :, :])
+    ships = [{"pos": pos[:, i], "psi": psi[:, i], "vel": vel[:, i], "speed": speed[:, i], "active": active[:, i]}
+             for i in range(n)]
+    out = []
+    for row, i in enumerate(rows):
+        contexts, plain = [], []
+        for j in (j for j in range(n) if j != i):
+            both = active[:, i] & active[:, j]
+            gij = PairGeometry(*(getattr(g, f)[:, row, j] for f in ("range", "beta", "alpha", "cpa", "tcpa")))
+            risk = risk_of_collision(gij.cpa, gij.tcpa, gij.range, both, profile)
+            episodes = risk_episodes(gij.range, gij.tcpa, risk, both, release_range(profile))
+            if not episodes:
+                plain.append(Encounter(i, j, names[i], names[j], profile.name, False, quantities=json_value({
+                    "min_range": float(np.min(gij.range[both])) if both.any() else None})))
+            last = int(np.flatnonzero(both)[-1]) if both.any() else 0
+            for k, ep in enumerate(episodes):
+                end = episodes[k + 1].onset - 1 if k + 1 < len(episodes) else last
+                contexts.append((j, encounter_context(t, ships[i], ships[j], gij, risk, ep,
+                                                      _run_start(both, ep.onset), end, profile)))
+        duties = [Duty(j, c.role, c.base if c.role in GIVE_WAY_ROLES else c.episode.onset, c.episode.onset,
+                       c.episode.release) for j, c in contexts]
+        clash = conflicts(duties)
+        for k, (j, c) in enumerate(contexts):
+            rules = give_way_rules(c) if c.role in GIVE_WAY_ROLES else stand_on_rules(c, excused_samples(
+                duties, k, t.size))
+            onset, release, closest = _times(c)
+            out.append(Encounter(i, j, names[i], names[j], profile.name, True,
+                                 ENCOUNTER_OF_ROLE[c.role], c.role, json_value(onset), json_value(release),
+                                 json_value(closest), rules, tuple(names[x] for x in clash[k]),
+                                 json_value(_quantities(c))))
+        out.extend(plain)
+    return sorted(out, key=lambda e: (e.own, e.other, -1.0 if e.onset is None else e.onset["t"]))
