@@ -27,8 +27,11 @@ PAPER_RUNS_PER_CELL = 5000
 
 WORKLOAD = r"""
 import inspect, json, sys, time
-from mmg_casadi.montecarlo.batching import DEFAULT_BATCH, prepare_layouts
-from mmg_casadi.montecarlo.execution import layout_for, run_batch
+try:  # 0.3 layout (subpackages)
+    from mmg_casadi.montecarlo.batching import DEFAULT_BATCH, prepare_layouts
+    from mmg_casadi.montecarlo.execution import layout_for, run_batch
+except ImportError:  # a baseline before the subpackages: the flat module
+    from mmg_casadi.montecarlo import DEFAULT_BATCH, layout_for, prepare_layouts, run_batch
 env, method, n, seed = int(sys.argv[1]), sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 params = json.loads(sys.argv[5])
 kw = {"params": params} if "params" in inspect.signature(run_batch).parameters else {}

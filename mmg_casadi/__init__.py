@@ -14,15 +14,15 @@ Examples
 """
 
 from mmg_casadi.closed_loop.layout import Layout
-from mmg_casadi.closed_loop.problem import build_problem, ClosedLoopModel, Problem
-from mmg_casadi.vessel.maneuvers import turning_circle, zigzag
+from mmg_casadi.closed_loop.problem import ClosedLoopModel, Problem, build_problem
+from mmg_casadi.closed_loop.simulation import Trajectory, simulate
 from mmg_casadi.guidance.methods import METHODS
-from mmg_casadi.vessel.mmg import linearise
 from mmg_casadi.montecarlo.study import run_study
 from mmg_casadi.params import PARAMETERS, load_file as load_params, resolve as resolve_params
-from mmg_casadi.scenarios.scenario import Scenario, load_scenario
 from mmg_casadi.scenarios.run import ScenarioResult, packaged_scenario, run_scenario
-from mmg_casadi.closed_loop.simulation import Trajectory, simulate
+from mmg_casadi.scenarios.scenario import Scenario, load_scenario
+from mmg_casadi.vessel.maneuvers import turning_circle, zigzag
+from mmg_casadi.vessel.mmg import linearise
 
 __all__ = [
     "ClosedLoopModel", "Layout", "METHODS", "PARAMETERS", "Problem", "Scenario", "ScenarioResult", "Trajectory",

@@ -18,13 +18,19 @@ import sys
 import tomllib
 from pathlib import Path
 
-from mmg_casadi.guidance import methods as registry
 from mmg_casadi.errors import InputError
+from mmg_casadi.guidance import methods as registry
 from mmg_casadi.io import write_json, write_text
-from mmg_casadi.limits import MAX_SHIPS
-from mmg_casadi.montecarlo.sampling import sample_traffic
-from mmg_casadi.scenarios.scenario import dump_scenario, scenario_from_dict
+from mmg_casadi.limits import MAX_SHIPS, check_runs
+from mmg_casadi.montecarlo.disturbance_sampling import parse_range
+from mmg_casadi.montecarlo.sampling import parse_envs, sample_traffic
 from mmg_casadi.params import PARAMETERS, check_value, help_text, load_file, markdown_table
+from mmg_casadi.scenarios.interchange import convert_file
+from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
+from mmg_casadi.scenarios.run import run_scenario
+from mmg_casadi.scenarios.scenario import dump_scenario, load_scenario, scenario_from_dict, with_method
+from mmg_casadi.signals import exit_status, signal_name, terminate_as_interrupt
+from mmg_casadi.vessel.maneuvers import speed_change, turning_circle, validate_maneuver_args, zigzag
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
 STUDIES = QUICK_STUDIES + ("imazu", "disturbance", "statistics", "sweep", "paper", "all")
@@ -91,15 +97,17 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``mmg-casadi`` argument parser (one sub-parser per command, study and tuning)."""
     p = _Parser(prog="mmg-casadi", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", parser_class=_Parser,
-                           metavar="{maneuver,simulate,study,tune,convert,params}")
+                           metavar="{maneuver,simulate,study,tune,convert,traffic,params}")
     sub.required = True
 
-    m = sub.add_parser("maneuver", help="standard manoeuvres: turning circle, zig-zag")
-    m.add_argument("kind", help="turning | zigzag")
+    m = sub.add_parser("maneuver", help="standard manoeuvres: turning circle, zig-zag, speed change")
+    m.add_argument("kind", help="turning | zigzag | speed")
     m.add_argument("--rudder", type=_float, default=35.0, help="turning rudder angle [deg], (0, 35]")
     m.add_argument("--port", action="store_true", help="turn to port (default starboard)")
     m.add_argument("--angle", type=_float, default=10.0, help="zig-zag angle [deg], (0, 35]")
     m.add_argument("--speed", type=_float, default=1.0, help="approach speed / design speed, [0.2, 1.2]")
+    m.add_argument("--to-speed", type=_float, default=None,
+                   help="speed change: the new speed / design speed, [0.2, 1.2] (default 0.5)")
     m.add_argument("--out", type=Path, required=True, help="output directory")
 
     s = sub.add_parser("simulate", help="run a scenario file")
@@ -210,10 +218,15 @@ def _params_of(a) -> dict | None:
 
 
 def _maneuver(a) -> dict:
-    from mmg_casadi.vessel.maneuvers import turning_circle, validate_maneuver_args, zigzag
-    from mmg_casadi.plotting import plot_maneuver
+    from mmg_casadi.plotting import plot_maneuver  # matplotlib: only for the figure
     validate_maneuver_args(a.kind)
-    if a.kind == "turning":
+    if a.to_speed is not None and a.kind != "speed":
+        raise InputError("--to-speed", "only with the 'speed' manoeuvre", a.to_speed)
+    if a.kind == "speed":
+        to = 0.5 if a.to_speed is None else a.to_speed
+        r = speed_change(to, speed=a.speed)
+        name = f"speed_{a.speed:g}_to_{to:g}"
+    elif a.kind == "turning":
         r = turning_circle(a.rudder, port=a.port, speed=a.speed)
         name = f"turning_{a.rudder:g}_{'port' if a.port else 'starboard'}"
     else:
@@ -227,10 +240,7 @@ def _maneuver(a) -> dict:
 
 
 def _simulate(a) -> dict:
-    from mmg_casadi.scenarios.scenario import load_scenario, with_method
-    from mmg_casadi.scenarios.run import run_scenario
     if a.file.suffix.lower() == ".json":
-        from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
         sc = load_traffic_situation(a.file)[0]
     else:
         sc = load_scenario(a.file)
@@ -243,6 +253,8 @@ def _simulate(a) -> dict:
 
 def _study(a) -> dict:
     params = _params_of(a)
+    if getattr(a, "runs", None) is not None:  # before any work (study paper runs the quick studies first)
+        check_runs(a.runs)
     names = QUICK_STUDIES if a.study == "all" else (a.study,)
     out = {}
     for n in names:
@@ -254,7 +266,6 @@ def _study(a) -> dict:
         if n != "waypoint-square" and getattr(a, "methods", None):
             kw["methods"] = a.methods
         if n == "statistics":
-            from mmg_casadi.montecarlo.disturbance_sampling import parse_range
             kw.update(runs=a.runs, envs=a.envs, base_seed=a.seed, backend=a.backend, address=a.address,
                       workers=a.workers, current=a.current and parse_range(a.current, "current"),
                       wind=a.wind and parse_range(a.wind, "wind"))
@@ -273,10 +284,9 @@ def _study(a) -> dict:
 
 def _tune(a) -> dict:
     if a.what == "pd":
-        from tuning import cli_pd
+        from tuning import cli_pd  # python-control and the tuning stack: only for 'tune'
         return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn, tracking_tolerance=a.tracking_tolerance)
-    from tuning import cli_apf
-    from mmg_casadi.montecarlo.sampling import parse_envs
+    from tuning import cli_apf  # the tuning stack: only for 'tune'
     envs = tuple(parse_envs(a.holdout_envs))
     return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a), envs=envs,
                        target=(5,) if 5 in envs else envs[-1:], starts=a.starts, grid=a.grid,
@@ -284,7 +294,6 @@ def _tune(a) -> dict:
 
 
 def _convert(a) -> dict:
-    from mmg_casadi.scenarios.interchange import convert_file
     return convert_file(a.file, a.out, method=a.method, target_method=a.target_method,
                         length_scale=a.length_scale, reference=a.reference)
 
@@ -323,7 +332,6 @@ def main(argv=None) -> int:
     argv : list of str, optional
         Command-line arguments without the program name (default ``sys.argv[1:]``).
     """
-    from mmg_casadi.signals import exit_status, signal_name, terminate_as_interrupt
     parser = build_parser()
     a = None
     try:

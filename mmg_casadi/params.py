@@ -31,6 +31,7 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from mmg_casadi.colregs.profiles import SCORING_PROFILES
 from mmg_casadi.errors import InputError, ParameterError, check_range
 from mmg_casadi.vessel.library import VESSELS
 
@@ -165,7 +166,7 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("fleet_from_ships", 16, 2, None, "", "a scenario of at least this many ships runs the fleet step (one "
        "ship's step mapped over the fleet; compile cost independent of the fleet) instead of the unrolled step",
        "our choice from benchmarks/fleet_scaling.py: the unrolled step compiles in 12/37/73/144 s at 10/20/30/40 "
-       "ships, the fleet step in 3-4 s; per ship-step 18-27 µs vs 21-29 µs; every paper scenario (<= 10 ships) "
+       "ships, the fleet step in 3-4 s; per ship-step 18-27 µs vs 8-21 µs; every paper scenario (<= 10 ships) "
        "stays unrolled", "simulation", kind="int", structural=True),
     _P("neighbour_slots", 16, 1, 64, "", "neighbours a ship of the fleet step sees: the nearest within the "
        "candidate radius R_safe + 2 V_max T_chunk; with more, the farther ones are ignored (counted)",
@@ -180,6 +181,15 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("engine_rate_rpm_s", 1.0, 0.0, None, "rpm/s", "largest rate at which the engine changes propeller speed "
        "towards a method's command (methods that command no speed keep the service rpm exactly)",
        "our choice: the KCS's service 115.5 rpm to stop in about 2 min", "vessel"),
+    _P("engine_lag_s", 10.0, 0.0, None, "s", "time constant of the engine's first-order response to an rpm "
+       "command", "our choice: a slow-speed two-stroke diesel under its governor answers a telegraph order within "
+       "tens of seconds; the rate limit dominates large orders", "vessel"),
+    _P("engine_dead_slow", 0.25, 0.0, 1.0, "", "lowest propeller speed a method may command (dead slow ahead), "
+       "as a fraction of the vessel's design rpm", "our choice: dead slow ahead of a 24-kn container ship is about "
+       "5-7 kn, 0.2-0.3 of its design speed", "vessel", low_open=True),
+    _P("engine_rpm_max", 1.05, 1.0, 2.0, "", "highest propeller speed a method may command, as a fraction of the "
+       "vessel's design rpm", "our choice: the maximum continuous rating a few per cent above the design (service) "
+       "rpm", "vessel"),
     # ILOS
     _P("ilos_delta", 2.0, 0.0, None, "L", "ILOS look-ahead distance Δ (K_p^g = 1/Δ)", "paper Table 2", "ilos",
        low_open=True),
@@ -276,6 +286,12 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "our choice: where the sink's pull |Λ|/r_g (Λ = −100) still beats the modified vortex f|K⁰|/d at the "
        "collision distance d = 2 L with f = 2 (K⁰ = −10): r_g < 10 L (paper §Limitations, 2nd mechanism)",
        "outcome", low_open=True),
+    _P("colregs_profile", "iitm-lab", None, None, "", "thresholds of the COLREG encounter scorer "
+       "(mmg_casadi.colregs.scorer: Rule 7 risk gate, encounter sectors, graded Rules 8, 13-17) in metrics.json "
+       "'encounters' and the Monte Carlo's colregs_risky/colregs_lawful/colregs_score",
+       "iitm-lab: the paper laboratory's R_safe, collision distance and head-on sector (paper Table 3, "
+       "§Statistical Analysis); ntnu-2023: Hagen et al. 2023 (Ocean Eng. 288); every threshold's source in "
+       "mmg_casadi.colregs.profiles", "outcome", kind="choice", choices=tuple(SCORING_PROFILES)),
     # environment (calm water by default, as in the paper; see mmg_casadi.vessel.environment)
     _P("current_speed", 0.0, 0.0, 1.0, "U", "speed of a uniform current (fraction of the design speed)",
        "our choice: calm water as in the paper; model Fossen 2021 §10.3 (mmg_casadi.vessel.environment)",

@@ -170,6 +170,9 @@ def plot_maneuver(result, path=None) -> Figure:
     if result.kind == "turning":
         ax.set_title(f"Turning circle, {m['rudder_deg']:g}° {m['direction']}: advance {m['advance']:.2f} L, "
                      f"tactical diameter {m['tactical_diameter']:.2f} L", fontsize=9)
+    elif result.kind == "speed":
+        ax.set_title(f"Speed change {m['speed']:g} → {m['to_speed']:g} U: {m['t_change_s'] / 60:.1f} min, "
+                     f"{m['reach_change_m'] / 1000:.2f} km to within 5 % of the change", fontsize=9)
     else:
         ax.set_title(f"Zig-zag {m['angle_deg']:g}/{m['angle_deg']:g}: overshoots {m['overshoot_1']:.1f}°, "
                      f"{m['overshoot_2']:.1f}°", fontsize=9)
@@ -199,7 +202,7 @@ def plot_paths(result, ax, *, title=None):
     Parameters
     ----------
     result : ScenarioResult
-        A simulated scenario (:func:`mmg_casadi.run_scenario`).
+        A simulated scenario (:func:`mmg_casadi.scenarios.run.run_scenario`).
     ax : matplotlib Axes
         Where to draw.
     title : str, optional

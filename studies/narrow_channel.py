@@ -27,6 +27,6 @@ def run(out, *, methods=None, params=None) -> dict:
     Returns
     -------
     dict
-        The resolved parameters and, per case and method, the metrics of :func:`mmg_casadi.run_scenario`.
+        The resolved parameters and, per case and method, the metrics of :func:`mmg_casadi.scenarios.run.run_scenario`.
     """
     return run_cases(narrow_channel_cases(), methods or APF_AND_VO, out, params, title="narrow channel")

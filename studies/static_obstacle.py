@@ -26,6 +26,6 @@ def run(out, *, methods=None, params=None) -> dict:
     Returns
     -------
     dict
-        The resolved parameters and, per case and method, the metrics of :func:`mmg_casadi.run_scenario`.
+        The resolved parameters and, per case and method, the metrics of :func:`mmg_casadi.scenarios.run.run_scenario`.
     """
     return run_cases(static_obstacle_cases(), methods or ALL_METHODS, out, params, title="static obstacle")

@@ -148,3 +148,11 @@ def test_more_steps_than_the_limit_are_refused_before_any_work(tmp_path, capsys)
     assert main(["simulate", str(SCENARIOS / "head_on.toml"), "--set", "dt=1e-6", "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "MAX_STEPS" in err and not out.exists()
+
+
+@pytest.mark.parametrize("study", ["paper", "statistics"])
+def test_too_many_runs_are_refused_before_any_work(tmp_path, capsys, study):
+    out = tmp_path / "s"
+    assert main(["study", study, "--runs", str(10**9), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--runs" in err[0] and "MAX_RUNS" in err[0] and not out.exists()

@@ -83,6 +83,31 @@ def test_public_function_finder_sees_the_flat_api():
     assert not any(".".join(n.split(".")[:-1]).split(".")[-1].startswith("_") for n in found)
 
 
+def cli_command_paths(parser=None, path=("mmg-casadi",)) -> list[tuple[str, ...]]:
+    """Every command path of the ``mmg-casadi`` parser (``("mmg-casadi", "study", "statistics")``, ...)."""
+    import argparse
+
+    from mmg_casadi.cli import build_parser
+    parser = parser or build_parser()
+    out = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                out.append(path + (name,))
+                out += cli_command_paths(sub, path + (name,))
+    return out
+
+
+def test_cli_command_paths():
+    paths = cli_command_paths()
+    assert ("mmg-casadi", "study", "statistics") in paths and ("mmg-casadi", "tune", "apf") in paths
+    assert ("mmg-casadi", "convert") in paths
+
+
+def _text(html_text: str) -> str:
+    return re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ", html_text))
+
+
 def _page(html: Path, module: str) -> str:
     return (html / "_autosummary" / f"{module}.html").read_text(encoding="utf-8")
 
@@ -122,6 +147,36 @@ def check_site(html: Path) -> None:
         assert shown and all((html / src).exists() for src in shown), f"gallery: no figure in {anchor}"
         text = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", "", sections[anchor]))
         assert re.search(r"Full size[^:]*: mmg-casadi study \S+", text), f"gallery: no full-size command in {anchor}"
+
+    # CLI reference: a section for every command of the parser, each with its options.
+    cli = (html / "cli.html").read_text(encoding="utf-8")
+    for path in cli_command_paths():
+        anchor = "-".join(path)
+        assert f'id="{anchor}"' in cli, f"cli reference: no section for {' '.join(path)}"
+    assert all(opt in cli for opt in ("--holdout-envs", "--target-method", "--tracking-tolerance"))
+    # File formats: every scenario key, results column, status and failure mechanism.
+    from mmg_casadi.closed_loop.outcome import OUTCOMES, RUN_FAILURES
+    from mmg_casadi.montecarlo.failures import MECHANISMS
+    from mmg_casadi.montecarlo.results import RUN_COLUMNS, SUMMARY_COLUMNS
+    from mmg_casadi.scenarios.scenario import OBSTACLE_KEYS, SETTINGS_KEYS, SHIP_KEYS, WALL_KEYS
+    formats = _text((html / "formats.html").read_text(encoding="utf-8"))
+    for name in (*SHIP_KEYS, *SETTINGS_KEYS, *OBSTACLE_KEYS, *WALL_KEYS, *RUN_COLUMNS, *SUMMARY_COLUMNS,
+                 *OUTCOMES, *RUN_FAILURES, *MECHANISMS, "collision_kind", "encounters"):
+        assert f" {name} " in formats, f"formats: {name} is not described"
+    # Theory: equations rendered by MathJax, with the paper's labels and links to the functions.
+    theory = (html / "theory.html").read_text(encoding="utf-8")
+    assert theory.count('class="math notranslate nohighlight"') >= 15, "theory: too few equations"
+    assert "mathjax" in theory.lower()
+    for label in ("mmg_nd", "psi_desired", "PD_control", "modified_vortex", "factor_f"):
+        assert f'id="equation-{label.lower()}"' in theory.lower(), f"theory: no equation ({label})"
+    assert "mmg_casadi.guidance.velocity_obstacle.velocity_obstacle" in theory
+    # References and changelog.
+    refs = _text((html / "references.html").read_text(encoding="utf-8"))
+    assert "Jadhav" in refs and "Somayajula" in refs
+    import mmg_casadi
+    changelog = _text((html / "changelog.html").read_text(encoding="utf-8"))
+    assert mmg_casadi.__version__ in changelog
+
 
 @pytest.mark.skipif(not os.environ.get("MMG_DOCS_HTML"), reason="set MMG_DOCS_HTML to a built site")
 def test_built_site():

@@ -12,7 +12,7 @@ import pytest
 from mmg_casadi.closed_loop.layout import env_values, is_disturbed, Layout
 from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.closed_loop.step import build_closed_loop_step
-from mmg_casadi.closed_loop.compiled import generate_source
+from mmg_casadi.compiled import generate_source
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, parse_range, sample_disturbance
 from mmg_casadi.errors import InputError, ScenarioError
 from mmg_casadi.montecarlo.execution import run_batch
@@ -36,14 +36,15 @@ def _leg(goal=(500.0, 0.0), heading=0.0, t_max=50.0, environment=None):
 # ------------------------------------------------------------------------------------------- calm unchanged
 
 # SHA-256 of the C source of these calm steps as generated without the environment wired in (CasADi 3.8.2; re-recorded
-# when the velocity obstacle's held heading became the last state row, and when the engine's propeller-speed row
-# and the wall-collision check entered the step; `study all` and `study statistics --runs 200 --envs 1-5` gave
-# the same outputs before and after): a calm layout must keep exactly the calm-water closed loop (and so every
-# paper number; tests/test_regression_runs.py checks the outcomes).
+# when the velocity obstacle's held heading became a state row, and again when the engine's propeller-speed row
+# (with its lag and limits), the per-leg propeller speeds and the wall-collision check entered the step;
+# `study all` and `study statistics --runs 200 --envs 1-5` gave the same outputs before and after): a calm layout
+# must keep exactly the calm-water closed loop (and so every paper number; tests/test_regression_runs.py checks
+# the outcomes).
 CALM_SOURCE_SHA256 = {
-    Layout(("none",)): "09b1fb42ae7b3b88dbbd5dd0ec73cc4c564506a51fb34cba44112596339c76af",
+    Layout(("none",)): "471261b7f3fcee2b257e5c4085f21195692f0ddb58b96152016776d9d18febe7",
     Layout(("modified-vortex",) * 3, n_obstacles=1):
-        "071ee88f27c34fdb4f157aee851a2dc45980a4004e193ce3afb278bc80b57ccb",
+        "72b35b0980cddac8aeb31bad6547554038e662d8ddc9832cfe4b9650a2502729",
 }
 
 

@@ -33,6 +33,8 @@ def _row(env: int, method: str, run: int, success: bool = True, **extra) -> dict
         "wind_direction_deg": 33.5 - run,
         "failure_mechanism": "" if success else "obstacle", "colregs_compliant": None if run % 3 == 0 else run % 2 == 0,
         "colregs_encounters": 0 if run % 3 == 0 else 1 + run % 2,
+        "colregs_risky": run % 3, "colregs_lawful": run % 3 // 2,
+        "colregs_score": math.nan if run % 3 == 0 else 0.5 + run / 97,
     }
     row.update(extra)
     return row
@@ -236,6 +238,30 @@ def test_summary_numbers():
     single = summary.rows[0]
     assert single["time_to_goal_mean"] == 5.0 and math.isnan(single["time_to_goal_ci_low"])
     assert summary.methods == ["modified-vortex", "vo"] and summary.environments == [1, 2]
+
+
+def test_summary_per_encounter_colregs_rate_and_score():
+    # 4 runs: 2 risky encounters (1 kept, score 0.5), none, 3 (3 kept, score 0.9), 1 (0 kept, score 0.2)
+    runs = [(2, 1, 0.5), (0, 0, math.nan), (3, 3, 0.9), (1, 0, 0.2)]
+    rows = [_row(1, "cv", r, colregs_risky=n, colregs_lawful=k, colregs_score=x) for r, (n, k, x) in enumerate(runs)]
+    s = summarize(rows).rows[0]
+    assert (s["colregs_risky"], s["colregs_lawful"], s["colregs_encounter_rate"]) == (6, 4, pytest.approx(4 / 6))
+    assert (s["colregs_encounter_ci_low"], s["colregs_encounter_ci_high"]) == pytest.approx(wilson_interval(4, 6))
+    assert s["colregs_score_mean"] == pytest.approx((2 * 0.5 + 3 * 0.9 + 1 * 0.2) / 6)  # over encounters
+    assert s["compliance_runs"] == 2  # the legacy run-level columns are unchanged (runs 1 and 2 judged)
+    md = summarize(rows).to_markdown().splitlines()
+    assert "COLREG encounters kept [%] (risky)" in md[0] and "| 66.7 [30.0, 90.3] (6) | 0.650 |" in md[2]
+    none = summarize([_row(1, "cv", 0, colregs_risky=0, colregs_lawful=0, colregs_score=math.nan)]).rows[0]
+    assert none["colregs_risky"] == 0 and math.isnan(none["colregs_encounter_rate"])
+    assert math.isnan(none["colregs_encounter_ci_low"]) and math.isnan(none["colregs_score_mean"])
+
+
+def test_table_of_the_previous_version_is_refused(tmp_path):
+    path = tmp_path / "runs.csv"
+    path.write_text(",".join(RUN_COLUMNS[:-3]) + "\n")
+    with pytest.raises(InputError, match="older version, without the columns colregs_risky, colregs_lawful, "
+                                         "colregs_score"):
+        ResultsTable(path).read()
 
 
 def test_summary_from_table_matches_summary_from_rows(tmp_path):

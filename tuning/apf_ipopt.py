@@ -43,7 +43,7 @@ Observations that shape the problem (see :func:`tune` and the report):
   units chatters and CE grows by 2–88 % (static obstacle 0.145 → 0.228, head-on 0.155 → 0.189, crossing ship 1
   0.139 → 0.193, conflict ship 2 0.090 → 0.169). With dt = 0.25 the horizon cap of 300 steps is T = 75: the
   long scenarios (overtaking, conflict, most samples) are truncated after their main encounters.
-* Derivatives: the natively compiled steps of :mod:`mmg_casadi.closed_loop.compiled` have no derivatives, so the rollout
+* Derivatives: the natively compiled steps of :mod:`mmg_casadi.compiled` have no derivatives, so the rollout
   uses the SX step in CasADi's virtual machine (``step.mapaccum``, an MX graph); the objective with its
   gradient costs ~10–170 ms per scenario of ≤ 300 steps. CasADi's own ``jit`` of the NLP functions
   (``TuningConfig.jit``) makes IPOPT 6.5x faster but its compilation (gcc -O1 of the functions and their

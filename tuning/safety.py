@@ -18,7 +18,7 @@ Monte Carlo study counts — while CE and MCTE are small secondary terms that br
 
 Gradients are exact: the rollout carries forward sensitivities. One *augmented step*
 ``z = [x; acc; ∂x/∂θ; ∂acc/∂θ] ↦ z⁺`` is built symbolically (CasADi forward AD, ``jtimes`` with one
-direction per tuned parameter), compiled to native code once per layout (disk cache of :mod:`mmg_casadi.closed_loop.compiled`),
+direction per tuned parameter), compiled to native code once per layout (disk cache of :mod:`mmg_casadi.compiled`),
 ``map``-ped over the scenarios of a layout and ``mapaccum``-ed over steps in chunks; the soft-min, softplus
 and normalisations are applied in closed form to the final accumulators and their sensitivities.
 
@@ -47,7 +47,7 @@ import numpy as np
 
 from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, Layout
 from mmg_casadi.closed_loop.step import AUX, build_closed_loop_step
-from mmg_casadi.closed_loop.compiled import compile_function
+from mmg_casadi.compiled import compile_function
 from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.errors import InputError, check_range
 from mmg_casadi.params import PARAMETERS

@@ -82,14 +82,16 @@ def write_flat_api() -> None:
 
 
 def _flat_names() -> dict[str, tuple[str, str]]:
-    """``mmg_casadi.__all__`` name → (defining module, name there), read from the package's relative imports."""
+    """``mmg_casadi.__all__`` name → (defining module, name there), read from the package's imports."""
     import mmg_casadi
     tree = ast.parse(Path(mmg_casadi.__file__).read_text(encoding="utf-8"))
     out = {}
     for node in tree.body:
-        if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module:
-            for alias in node.names:
-                out[alias.asname or alias.name] = (f"mmg_casadi.{node.module}", alias.name)
+        if isinstance(node, ast.ImportFrom) and node.module:
+            module = f"mmg_casadi.{node.module}" if node.level == 1 else node.module
+            if module.startswith("mmg_casadi."):
+                for alias in node.names:
+                    out[alias.asname or alias.name] = (module, alias.name)
     return {k: v for k, v in out.items() if k in mmg_casadi.__all__}
 
 
@@ -177,6 +179,290 @@ def build_gallery(workers: int) -> None:
     _write(GENERATED / "gallery.md", "\n".join(sections))
 
 
+# -- CLI reference -------------------------------------------------------------------------------------------
+
+def cli_commands(parser, path=("mmg-casadi",)):
+    """``(command path, parser, help)`` of every command of ``parser``, depth first (``parser`` itself first)."""
+    import argparse
+    out = [(path, parser, parser.description or "")]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            helps = {a.dest: a.help or "" for a in action._choices_actions}
+            for name, sub in action.choices.items():
+                for p, s, h in cli_commands(sub, path + (name,)):
+                    out.append((p, s, helps.get(name, "") if p == path + (name,) else h))
+    return out
+
+
+def _cell(text) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _cli_rows(parser) -> list[str]:
+    import argparse
+    rows = []
+    for a in parser._actions:
+        if isinstance(a, (argparse._HelpAction, argparse._SubParsersAction)):
+            continue
+        if a.option_strings:
+            name = ", ".join(f"`{o}`" for o in a.option_strings)
+            arg = "" if a.nargs == 0 else f"`{a.metavar or a.dest.upper()}`"
+        else:
+            name, arg = f"`{a.metavar or a.dest}`", "positional"
+        if a.required and a.option_strings:
+            default = "required"
+        elif a.nargs == 0 or a.default in (None, [], argparse.SUPPRESS) or not a.option_strings:
+            default = ""
+        else:
+            default = f"`{a.default}`"
+        extra = " (repeatable)" if isinstance(a, argparse._AppendAction) else ""
+        rows.append(f"| {name} | {arg} | {default} | {_cell((a.help or '') + extra)} |")
+    return rows
+
+
+def write_cli() -> None:
+    """``cli.md``: one section per command of :func:`mmg_casadi.cli.build_parser`, usage and every option."""
+    from mmg_casadi.cli import build_parser
+    old = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = "110"  # argparse wraps the usage line at the terminal width
+    try:
+        parts = []
+        for path, parser, help_text in cli_commands(build_parser()):
+            if len(path) == 1:
+                continue
+            level = "#" * min(len(path), 4)
+            parts += [f"{level} {' '.join(path)}", "", _cell(help_text).rstrip(".") + ".", "",
+                      "```text", parser.format_usage().strip(), "```", ""]
+            rows = _cli_rows(parser)
+            if rows:
+                parts += ["| option | argument | default | meaning |", "|---|---|---|---|", *rows, ""]
+    finally:
+        if old is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = old
+    _write(GENERATED / "cli.md", "\n".join(parts))
+
+
+# -- file formats --------------------------------------------------------------------------------------------
+
+def _check_keys(what: str, documented, actual) -> None:
+    """A build warning (an error under -W) when the documented keys are not exactly the code's."""
+    missing, extra = sorted(set(actual) - set(documented)), sorted(set(documented) - set(actual))
+    if missing or extra:
+        logger.warning("docs/_ext/mmg_docs.py documents the %s out of step with the code: undocumented %s, "
+                       "no longer in the code %s", what, missing, extra, type="mmg_docs", subtype="formats")
+
+
+def _table(head: tuple[str, ...], rows) -> list[str]:
+    return ["| " + " | ".join(head) + " |", "|" + "---|" * len(head),
+            *("| " + " | ".join(_cell(c) for c in r) + " |" for r in rows), ""]
+
+
+RUN_COLUMN_DOCS = {
+    "environment": ("int", "environment 1–5 of the paper's statistical analysis"),
+    "method": ("str", "guidance method of every ship of the run"),
+    "run": ("int", "run index within (environment, method); the scenario depends only on (environment, run, seed)"),
+    "seed": ("int", "base seed of the sampler"),
+    "success": ("bool", "the own ship (ship 0) reached its goal without a collision"),
+    "fleet_success": ("bool", "every ship reached its goal without a collision"),
+    "failure": ("str", "`\"\"` on success, else one of the run failures below"),
+    "failure_pair": ("str", "collision partners: `0-j` (ship j), `0-obs<k>` (obstacle k), `0-wall<k>` (wall "
+                     "segment k)"),
+    "failure_time": ("float, L/U", "time of the collision or of the stall; empty otherwise"),
+    "time_to_goal": ("float, L/U", "own ship's time to its goal (empty when it did not arrive)"),
+    "ce": ("float", "own ship's control effort, eq. (controller_effort_equation)"),
+    "mcte": ("float, L", "own ship's mean cross-track error, eq. (crosstrack_metric_equation)"),
+    "fleet_time_to_goal": ("float, L/U", "mean time to goal over the ships that reached their goals"),
+    "fleet_ce": ("float", "mean CE over the ships that reached their goals"),
+    "fleet_mcte": ("float, L", "mean MCTE over the ships that reached their goals"),
+    "min_distance": ("float, L", "own ship's closest approach to any ship or obstacle centre"),
+    "guidance_call_us": ("float, µs", "measured time of one guidance call of the method in this run's layout"),
+    "n_ships": ("int", "ships in the scenario, own ship included"),
+    "n_obstacles": ("int", "static obstacles"),
+    "current_speed": ("float, U", "sampled uniform current (0 without `--current`)"),
+    "current_direction_deg": ("float, deg", "direction the current flows towards"),
+    "wind_speed": ("float, m/s", "sampled true wind speed (0 without `--wind`)"),
+    "wind_direction_deg": ("float, deg", "direction the wind comes from"),
+    "failure_mechanism": ("str", "`\"\"` on success, else one of the failure mechanisms below"),
+    "colregs_compliant": ("bool", "legacy scorer: the own ship complied in all of its classified encounters "
+                          "(empty without one)"),
+    "colregs_encounters": ("int", "legacy scorer: the own ship's classified encounters"),
+    "colregs_risky": ("int", "encounter scorer: the own ship's encounters with a risk of collision"),
+    "colregs_lawful": ("int", "encounter scorer: of those, the ones it was compliant in"),
+    "colregs_score": ("float", "encounter scorer: mean graded score of those encounters (0–1)"),
+}
+
+OUTCOME_DOCS = {
+    "reached": "came within `goal_tolerance` of its final waypoint",
+    "diverged": "the state left the model's envelope (|u|, |v| < 3, |r| < 5); `ce`/`mcte` are null",
+    "stalled": "made no progress towards its goal during the last `stall_window` before `t_max`; `stalled_at` "
+               "is the position closest to the goal",
+    "timeout": "none of the above by `t_max`",
+}
+
+RUN_FAILURE_DOCS = {
+    "collision": "the own ship came within `collision_distance` of a ship or an obstacle centre, or touched a "
+                 "wall (a collision wins over every other failure)",
+    "timeout": "no collision, the own ship's outcome is `timeout`",
+    "diverged": "no collision, the own ship's outcome is `diverged`",
+    "stalled": "no collision, the own ship's outcome is `stalled`",
+}
+
+MECHANISM_DOCS = {
+    "started-too-close": "the collision was decided by the initial positions and headings (the paper's first "
+                         "mechanism): it happened no later than the KCS's 90° turn time with full rudder, or the "
+                         "agent hit could not be avoided from the start by the own ship alone",
+    "obstacle-near-goal": "hit a static obstacle whose centre lies within `near_goal_distance` of the own goal "
+                          "(the paper's second mechanism, static)",
+    "near-goal": "hit a ship while one of the two was within `near_goal_distance` of its own goal (the paper's "
+                 "second mechanism)",
+    "ship-ship": "any other collision with a ship",
+    "obstacle": "any other collision with a static obstacle",
+    "stalled": "no collision, goal not reached: stalled",
+    "timeout": "no collision, goal not reached: timed out",
+    "diverged": "no collision, goal not reached: diverged",
+}
+
+
+def _summary_doc(column: str):
+    from mmg_casadi.montecarlo.failures import MECHANISMS
+    from mmg_casadi.montecarlo.results import METRICS
+    fixed = {
+        "environment": "environment", "method": "method", "runs": "runs in the cell",
+        "success_rate": "fraction of runs with `success`", "success_ci_low": "Wilson 95 % interval, low",
+        "success_ci_high": "Wilson 95 % interval, high",
+        "compliance_runs": "runs with a classified encounter (legacy scorer)",
+        "compliance_rate": "fraction of those with `colregs_compliant`",
+        "compliance_ci_low": "Wilson 95 % interval, low", "compliance_ci_high": "Wilson 95 % interval, high",
+        "colregs_risky": "sum of `colregs_risky` over the runs", "colregs_lawful": "sum of `colregs_lawful`",
+        "colregs_encounter_rate": "`colregs_lawful / colregs_risky` (per encounter)",
+        "colregs_encounter_ci_low": "Wilson 95 % interval, low",
+        "colregs_encounter_ci_high": "Wilson 95 % interval, high",
+        "colregs_score_mean": "mean of `colregs_score`",
+    }
+    if column in fixed:
+        return fixed[column]
+    for m in METRICS:
+        over = " over the successful runs" if m != "guidance_call_us" else " over every run"
+        for suffix, text in (("_mean", "mean of `{m}`" + over), ("_ci_low", "normal 95 % interval of the mean, low"),
+                             ("_ci_high", "normal 95 % interval of the mean, high")):
+            if column == m + suffix:
+                return text.format(m=m)
+    for mech in MECHANISMS:
+        if column == f"failures_{mech.replace('-', '_')}":
+            return f"failed runs with `failure_mechanism` = `{mech}`"
+    return None
+
+
+def write_formats() -> None:
+    """``formats_*.md``: scenario keys, result columns, statuses and mechanisms from the code's own tuples."""
+    import dataclasses
+
+    from mmg_casadi.closed_loop.outcome import OUTCOMES, RUN_FAILURES
+    from mmg_casadi.guidance.methods import METHODS
+    from mmg_casadi.montecarlo.failures import MECHANISMS
+    from mmg_casadi.montecarlo.results import RUN_COLUMNS, SUMMARY_COLUMNS
+    from mmg_casadi.params import PARAMETERS
+    from mmg_casadi.scenarios import scenario as S
+    from mmg_casadi.vessel.library import VESSELS
+
+    methods = ", ".join(f"`{m}`" for m in METHODS)
+    ship_defaults = {f.name: f.default for f in dataclasses.fields(S.ShipSpec)
+                     if f.default is not dataclasses.MISSING}
+    obstacle_defaults = {f.name: f.default for f in dataclasses.fields(S.ObstacleSpec)
+                         if f.default is not dataclasses.MISSING}
+    lo, hi = S.SPEED_RANGE
+    tables = {
+        "settings": ("table", "required", "scenario-wide settings: `method` and any parameter of the table"),
+        "ships": ("array of tables", "required, ≥ 1", "the ships; the first is the own ship"),
+        "obstacles": ("array of tables", "none", "static circular obstacles"),
+        "walls": ("array of tables", "none", "channel walls, each a polyline"),
+        "environment": ("table", "calm water", "uniform current and steady wind (aliases of table parameters)"),
+    }
+    ship = {
+        "name": ("string", "`ship<i>`", "", "unique name"),
+        "start": ("[x, y]", "required", "L", "start position"),
+        "heading": ("number", "required", "deg", "initial heading, from x (north) towards y (east)"),
+        "speed": ("number", "required", "U", f"speed on the first leg (sets the propeller rpm), in [{lo}, {hi}]"),
+        "waypoints": ("list of [x, y]", "required", "L", "at least one; the last one is the goal"),
+        "method": ("string", "`settings.method`" if ship_defaults.get("method") is None else ship_defaults["method"],
+                   "", f"this ship's method: {methods}"),
+        "stays": ("bool", f"`{str(ship_defaults['stays']).lower()}`", "",
+                  "after reaching its goal the ship stays as an obstacle"),
+        "speeds": ("list of numbers", "`speed` on every leg", "U",
+                   f"speed on the leg to each waypoint, one per waypoint, each in [{lo}, {hi}]"),
+        "vessel": ("string", "the table's `vessel`" if ship_defaults.get("vessel") is None else ship_defaults["vessel"],
+                   "", "hull: " + ", ".join(f"`{v}`" for v in VESSELS)),
+    }
+    obstacle = {
+        "position": ("[x, y]", "required", "L", "centre"),
+        "radius": ("number > 0", f"`{obstacle_defaults['radius']}`", "L", "radius"),
+    }
+    wall = {"points": ("list of [x, y]", "required", "L",
+                       "polyline of ≥ 2 points; each consecutive pair is one wall segment")}
+    _check_keys("top-level scenario tables", tables, S.TOP_KEYS)
+    _check_keys("[[ships]] keys", ship, S.SHIP_KEYS)
+    _check_keys("[[obstacles]] keys", obstacle, S.OBSTACLE_KEYS)
+    _check_keys("[[walls]] keys", wall, S.WALL_KEYS)
+
+    def param_row(key, name):
+        p = PARAMETERS[name]
+        default = str(p.default).lower() if p.kind == "bool" else str(p.default)
+        allowed = p.allowed().removeprefix("a number in ").removeprefix("one of: ")
+        return (f"`{key}`", p.kind, f"`{default}`", allowed, p.meaning)
+
+    out = ["### Tables", ""]
+    out += _table(("table", "type", "default", "meaning"), ((f"`[{k}]`" if v[0] == "table" else f"`[[{k}]]`",
+                                                            *v) for k, v in tables.items()))
+    out += ["### `[settings]`", "",
+            "`method` and every parameter of the table (see {doc}`concepts`, where each has its source). "
+            "`dt`, `t_max`, `r_safe`, `collision_distance` and `goal_tolerance` are the scenario's settings "
+            "proper; the others override the parameter for this scenario. Allowed values include the unit.", ""]
+    rows = [("`method`", "string", "required", methods, "guidance method of every ship without its own")]
+    rows += [param_row(k, k) for k in S.SETTINGS_KEYS if k != "method"]
+    out += _table(("key", "type", "default", "allowed", "meaning"), rows)
+    for title, spec in (("`[[ships]]`", ship), ("`[[obstacles]]`", obstacle), ("`[[walls]]`", wall)):
+        out += [f"### {title}", ""]
+        out += _table(("key", "type", "default", "unit", "meaning"), ((f"`{k}`", *v) for k, v in spec.items()))
+    out += ["### `[environment]`", "",
+            "Each key is an alias of a parameter of the table; giving it also in `[settings]` is an error.", ""]
+    out += _table(("key", "type", "default", "allowed", "meaning"),
+                  (param_row(k, v) for k, v in S.ENVIRONMENT_KEYS.items()))
+    _write(GENERATED / "formats_scenario.md", "\n".join(out))
+
+    _check_keys("runs.csv columns", RUN_COLUMN_DOCS, RUN_COLUMNS)
+    out = _table(("column", "type, unit", "meaning"),
+                 ((f"`{c}`", *RUN_COLUMN_DOCS.get(c, ("", ""))) for c in RUN_COLUMNS))
+    _write(GENERATED / "formats_runs.md", "\n".join(out))
+
+    docs = {c: _summary_doc(c) for c in SUMMARY_COLUMNS}
+    _check_keys("summary.csv columns", {c for c, d in docs.items() if d}, SUMMARY_COLUMNS)
+    out = _table(("column", "meaning"), ((f"`{c}`", docs[c] or "") for c in SUMMARY_COLUMNS))
+    _write(GENERATED / "formats_summary.md", "\n".join(out))
+
+    _check_keys("ship outcomes", OUTCOME_DOCS, OUTCOMES)
+    _check_keys("run failures", RUN_FAILURE_DOCS, RUN_FAILURES)
+    _check_keys("failure mechanisms", MECHANISM_DOCS, MECHANISMS)
+    out = ["### Ship status (`metrics.json` `ships[].status`)", ""]
+    out += _table(("status", "meaning"), ((f"`{k}`", OUTCOME_DOCS.get(k, "")) for k in OUTCOMES))
+    out += ["### Run failure (`runs.csv` `failure`)", "", "`\"\"` when the run succeeded.", ""]
+    out += _table(("failure", "meaning"), ((f"`{k}`", RUN_FAILURE_DOCS.get(k, "")) for k in RUN_FAILURES))
+    out += ["### Failure mechanism (`runs.csv` `failure_mechanism`)", "",
+            "Checked in this order; the first that applies wins ({py:mod}`mmg_casadi.montecarlo.failures`). "
+            "`\"\"` when the run succeeded.", ""]
+    out += _table(("mechanism", "meaning"), ((f"`{k}`", MECHANISM_DOCS.get(k, "")) for k in MECHANISMS))
+    _write(GENERATED / "formats_status.md", "\n".join(out))
+
+    from mmg_casadi.scenarios import run as run_module
+    _write(GENERATED / "formats_metrics.rst", inspect_doc(run_module) + "\n")
+
+
+def inspect_doc(obj) -> str:
+    import inspect
+    return inspect.getdoc(obj) or ""
+
+
 def resolve_flat_name(app, env, node, contnode):
     """Let ``mmg_casadi.NAME`` of the flat API resolve to the object where NAME is defined."""
     target = node.get("reftarget", "")
@@ -195,6 +481,8 @@ def generate(app) -> None:
     write_parameters()
     write_flat_api()
     write_claims()
+    write_cli()
+    write_formats()
     copy_notebooks()
     build_gallery(app.config.mmg_gallery_workers)
 

@@ -1,8 +1,9 @@
 """Monte Carlo statistics
 
-The paper's five-panel figure of the statistical analysis (success rate, computation time per guidance call, time
-to goal, CE and MCTE against the environment, with 95 % confidence intervals), here from only 4 runs per
-environment and one method, so the intervals are wide; the paper uses 5000 runs per environment.
+The six-panel figure of the statistical analysis: the paper's five (success rate, computation time per guidance
+call, time to goal, CE and MCTE against the environment, with 95 % confidence intervals) and the own ship's COLREG
+compliance. Here from only 4 runs per environment and one method, so the intervals are wide; the paper uses 5000
+runs per environment (full-size results: {doc}`paper`).
 
 Full size (the paper's three methods): `mmg-casadi study statistics --runs 5000 --out out/statistics`
 """

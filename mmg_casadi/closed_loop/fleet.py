@@ -89,26 +89,27 @@ def neighbour_lists(layout: Layout, x: np.ndarray, p: np.ndarray, radius: float)
     N, S, K = layout.n_ships, layout.n_obstacles, layout.neighbours
     pts = np.column_stack([x[layout.rows("x")], x[layout.rows("y")]])
     if S:
-        obs = layout.split_params(np.asarray(p, float))["obstacles"]
-        pts = np.vstack([pts, np.asarray(obs)[0:2, :].T])
-    tree = cKDTree(pts)
-    out = np.full((K, N), float(N + S))
-    overflow = 0
-    for i, cand in enumerate(tree.query_ball_point(pts[:N], r=radius)):
-        cand = [j for j in cand if j != i]
-        if len(cand) > K:
-            overflow += 1
-            d = np.hypot(*(pts[cand] - pts[i]).T)
-            cand = [cand[k] for k in np.argsort(d, kind="stable")[:K]]
-        cand.sort()
-        out[:len(cand), i] = cand
+        obs = np.asarray(p, float)[layout.param_block("obstacles")].reshape(S, 3)
+        pts = np.vstack([pts, obs[:, 0:2]])
+    n_agents = len(pts)
+    _, idx = cKDTree(pts).query(pts[:N], k=min(K + 2, n_agents), distance_upper_bound=radius)
+    idx = np.asarray(idx).reshape(N, -1)
+    idx = np.where(idx == np.arange(N)[:, None], n_agents, idx)  # drop the ship itself (pad = N + S)
+    valid = idx < n_agents
+    # nearest first, self removed: keep the first K valid entries of each row (the tree sorts by distance)
+    order = np.argsort(~valid, axis=1, kind="stable")
+    idx = np.take_along_axis(idx, order, axis=1)
+    overflow = int(np.count_nonzero(valid.sum(axis=1) > K))
+    out = np.sort(idx[:, :K], axis=1).T.astype(float)
+    if out.shape[0] < K:
+        out = np.vstack([out, np.full((K - out.shape[0], N), float(n_agents))])
     return out, overflow
 
 
 def _ship_symbols(layout: Layout) -> dict:
     """Symbols of one ship's inputs to the fleet step."""
     G = len(GLOBAL_PARAMS) + len(layout.method_inputs)
-    return {"x": ca.SX.sym("x", layout.ns), "sp": ca.SX.sym("sp", len(SHIP_PARAMS) + 2 * layout.max_path),
+    return {"x": ca.SX.sym("x", layout.ns), "sp": ca.SX.sym("sp", layout.ship_params_size),
             "g": ca.SX.sym("g", G), "walls": ca.SX.sym("walls", 4 * layout.n_walls),
             "env": ca.SX.sym("env", 5 if layout.disturbed else 0), "t": ca.SX.sym("t"),
             "nb": ca.SX.sym("nb", AGENT_ROWS * layout.neighbours)}
@@ -121,7 +122,9 @@ def _ship_context(layout: Layout, sym: dict) -> tuple[dict, dict]:
     P = {name: sym["g"][k] for k, name in enumerate(names)}
     sp = sym["sp"]
     Pi = {name: sp[k] for k, name in enumerate(SHIP_PARAMS)}
-    Pi["path"] = ca.reshape(sp[len(SHIP_PARAMS):], 2, layout.max_path)
+    k0 = len(SHIP_PARAMS)
+    Pi["path"] = ca.reshape(sp[k0:k0 + 2 * layout.max_path], 2, layout.max_path)
+    Pi["leg_rpm"] = sp[k0 + 2 * layout.max_path:]
     P["ships"] = [Pi]
     P["obstacles"] = ca.SX(3, 0)
     P["walls"] = ca.reshape(sym["walls"], 4, layout.n_walls)
@@ -222,7 +225,7 @@ def build_fleet_step(layout: Layout) -> ca.Function:
     f = _ship_functions(layout)
     key = layout.key()
     x, p, nbr = ca.MX.sym("x", layout.nx), ca.MX.sym("p", layout.np), ca.MX.sym("nbr", K, N)
-    G0, nsp = len(GLOBAL_PARAMS), len(SHIP_PARAMS) + 2 * layout.max_path
+    G0, nsp = len(GLOBAL_PARAMS), layout.ship_params_size
     t, X = x[0], ca.reshape(x[1:], ns, N)
     SP = ca.reshape(p[G0:G0 + N * nsp], nsp, N)
     off = G0 + N * nsp

@@ -11,6 +11,7 @@ Numeric parameters (gains, field constants, speeds, paths, obstacles, walls) are
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -52,10 +53,11 @@ GLOBAL_PARAMS = (
 """Numeric inputs of the compiled step, in order: the table's parameters (:mod:`mmg_casadi.params`) with the
 angles ``delta_max`` and ``gamma_max`` in rad (the table holds them in degrees); see :func:`step_values`."""
 _DEG_INPUTS = {"delta_max": "delta_max_deg", "gamma_max": "gamma_max_deg"}
-SHIP_PARAMS = ("n_rpm", "n_path", "stays", "engine_rate", "half_beam")
+SHIP_PARAMS = ("n_rpm", "n_path", "stays", "engine_rate", "half_beam", "engine_lag", "rpm_min", "rpm_max")
 """Per-ship numeric inputs: service propeller speed (rev/min), waypoint count, whether the ship stays as an obstacle
-after its goal, the engine's largest rate (rev/min per L/U of the ship's vessel) and half its vessel's beam (L,
-the distance at which its side touches a wall)."""
+after its goal, the engine's largest rate (rev/min per L/U of the ship's vessel), half its vessel's beam (L, the
+distance at which its side touches a wall), the engine's time constant (L/U) and the range of propeller speeds a
+method may command (rev/min)."""
 
 ENV_INPUTS = ("V_c", "beta_c", "U_w", "psi_w", "crab")
 """Trailing numeric inputs of a disturbed step (:attr:`Layout.disturbed`): the model's disturbance ``env =
@@ -124,9 +126,9 @@ class Layout:
         """
         return self.vessels[i] if self.vessels else DEFAULT_VESSEL
 
-    @property
+    @functools.cached_property
     def memory(self) -> tuple[str, ...]:
-        """Memory rows of the methods this layout uses (:attr:`mmg_casadi.guidance.methods.Method.memory`), in
+        """Memory rows of the methods this layout uses (``Method.memory``), in
         registry order; every ship of the layout has them."""
         used = set(self.methods)
         out = []
@@ -134,7 +136,7 @@ class Layout:
             out += [k for k in m.memory if n in used and k not in out]
         return tuple(out)
 
-    @property
+    @functools.cached_property
     def ship_state(self) -> tuple[str, ...]:
         """Names of one ship's rows of the scenario state: :data:`SHIP_STATE`, then :attr:`memory`."""
         return SHIP_STATE + self.memory
@@ -165,7 +167,7 @@ class Layout:
         >>> lay.row("psi", 1) == 1 + lay.ns + SHIP_STATE.index("psi")
         True
         """
-        return 1 + ship * self.ns + self.ship_state.index(name)
+        return 1 + ship * self.ns + self._columns[name]
 
     def column(self, name: str) -> int:
         """Index of state row ``name`` within a ship's block (a column of :func:`~mmg_casadi.closed_loop.state.ship_rows`).
@@ -175,7 +177,11 @@ class Layout:
         name : str
             A name of :attr:`ship_state`.
         """
-        return self.ship_state.index(name)
+        return self._columns[name]
+
+    @functools.cached_property
+    def _columns(self) -> dict:
+        return {name: k for k, name in enumerate(self.ship_state)}
 
     def rows(self, name: str) -> list[int]:
         """Index of state row ``name`` of every ship, in ship order.
@@ -185,7 +191,8 @@ class Layout:
         name : str
             A name of :attr:`ship_state`.
         """
-        return [self.row(name, i) for i in range(self.n_ships)]
+        first = self.row(name, 0)
+        return list(range(first, first + self.n_ships * self.ns, self.ns))
 
     def ship_block(self, ship: int) -> slice:
         """The rows of ship ``ship``'s block of the scenario state.
@@ -211,7 +218,7 @@ class Layout:
     @property
     def np(self) -> int:
         """Rows of the parameter vector."""
-        return (len(GLOBAL_PARAMS) + self.n_ships * (len(SHIP_PARAMS) + 2 * self.max_path)
+        return (len(GLOBAL_PARAMS) + self.n_ships * (self.ship_params_size)
                 + 3 * self.n_obstacles + 4 * self.n_walls + (len(ENV_INPUTS) if self.disturbed else 0)
                 + len(self.method_inputs))
 
@@ -247,6 +254,37 @@ class Layout:
         """
         return GLOBAL_PARAMS.index(name)
 
+    @property
+    def ship_params_size(self) -> int:
+        """Rows of one ship's block of the parameter vector: :data:`SHIP_PARAMS`, the padded path (2 per column)
+        and the propeller speed of each leg (one per column, ``leg_rpm[k]`` on the way to column ``k``)."""
+        return len(SHIP_PARAMS) + 3 * self.max_path
+
+    def param_block(self, name: str) -> slice:
+        """Rows of the parameter vector holding block ``name``: ``"ships"``, ``"obstacles"`` (3 per obstacle),
+        ``"walls"`` (4 per segment) or ``"env"``.
+
+        Parameters
+        ----------
+        name : str
+            One of ``"ships"``, ``"obstacles"``, ``"walls"``, ``"env"``.
+
+        Examples
+        --------
+        >>> lay = Layout(("none",), n_obstacles=2)
+        >>> sl = lay.param_block("obstacles")
+        >>> sl.stop - sl.start
+        6
+        """
+        sizes = {"ships": self.n_ships * (self.ship_params_size), "obstacles": 3 * self.n_obstacles,
+                 "walls": 4 * self.n_walls, "env": len(ENV_INPUTS) if self.disturbed else 0}
+        start = len(GLOBAL_PARAMS)
+        for key, size in sizes.items():
+            if key == name:
+                return slice(start, start + size)
+            start += size
+        raise ValueError(f"name: expected one of {', '.join(sizes)}, got {name!r}")
+
     def split_params(self, p):
         """Split a parameter vector (symbolic or numeric) into named pieces.
 
@@ -268,6 +306,8 @@ class Layout:
                 i += 1
             d["path"] = ca.reshape(p[i:i + 2 * self.max_path], 2, self.max_path)
             i += 2 * self.max_path
+            d["leg_rpm"] = p[i:i + self.max_path]
+            i += self.max_path
             ships.append(d)
         out["ships"] = ships
         out["obstacles"] = ca.reshape(p[i:i + 3 * self.n_obstacles], 3, self.n_obstacles)
@@ -287,8 +327,9 @@ class Layout:
 def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(), walls=(), env=None) -> np.ndarray:
     """Numeric parameter vector for ``layout``.
 
-    ``ships[i]`` has ``n_rpm``, ``path`` (K_i x 2 array: start then waypoints) and ``stays``; paths are padded to
-    ``layout.max_path`` columns by repeating the last waypoint. The engine's rate is the table's
+    ``ships[i]`` has ``n_rpm``, ``path`` (K_i x 2 array: start then waypoints), ``stays`` and optionally
+    ``leg_rpm`` (K_i propeller speeds, entry k on the leg to path point k; default ``n_rpm`` on every leg); paths
+    are padded to ``layout.max_path`` columns by repeating the last waypoint. The engine's rate is the table's
     ``engine_rate_rpm_s`` (in ``globals_``) on the time scale of each ship's vessel. ``obstacles`` are ``(x, y, radius)``, walls
     ``(ax, ay, bx, by)``; ``env`` the :data:`ENV_INPUTS` of a disturbed layout (:func:`env_values`).
 
@@ -317,8 +358,15 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
         padded = np.vstack([path, np.repeat(path[-1:], layout.max_path - k, axis=0)])
         hull = load_vessel(layout.vessel(i)).ship
         rate = float(globals_["engine_rate_rpm_s"]) * hull.time_scale_s
-        vals += [float(s["n_rpm"]), float(k), float(bool(s.get("stays", False))), rate, 0.5 * hull.B / length_unit]
+        lag = float(globals_["engine_lag_s"]) / hull.time_scale_s
+        rpm_range = [float(globals_[k]) * hull.n_design_rpm for k in ("engine_dead_slow", "engine_rpm_max")]
+        vals += [float(s["n_rpm"]), float(k), float(bool(s.get("stays", False))), rate, 0.5 * hull.B / length_unit,
+                 lag, *rpm_range]
         vals += list(padded.reshape(-1))  # column-major (x0, y0, x1, y1, ...) = reshape(2, K)
+        legs = [float(v) for v in s.get("leg_rpm", [s["n_rpm"]] * k)]
+        if len(legs) != k:
+            raise ValueError(f"ships[{i}].leg_rpm: expected {k} entries (one per path point), got {len(legs)}")
+        vals += legs + [legs[-1]] * (layout.max_path - k)
     for o in obstacles:
         vals += [float(o[0]), float(o[1]), float(o[2])]
     for w in walls:
@@ -356,7 +404,8 @@ def step_values(resolved: dict) -> dict:
     for m in methods.METHODS.values():
         for name in m.inputs:
             out[name] = math.radians(float(resolved[name + "_deg"])) if name not in resolved else float(resolved[name])
-    out["engine_rate_rpm_s"] = float(resolved["engine_rate_rpm_s"])
+    for name in ("engine_rate_rpm_s", "engine_lag_s", "engine_dead_slow", "engine_rpm_max"):
+        out[name] = float(resolved[name])
     return out
 
 

@@ -200,8 +200,17 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
                     vessels=() if set(vessels) == {DEFAULT_VESSEL} else vessels,
                     neighbours=resolved["neighbour_slots"] if len(sc.ships) >= resolved["fleet_from_ships"] else 0)
     model = ClosedLoopModel(layout, resolved)
-    ships = tuple({"n_rpm": propeller_rpm_for_speed(s.speed, load_vessel(v).ship), "path": [s.start, *s.waypoints],
-                   "stays": s.stays, "start": s.start, "heading": s.heading_rad, "speed": s.speed}
-                  for s, v in zip(sc.ships, vessels))
+    ships = tuple(_ship_inputs(s, load_vessel(v).ship) for s, v in zip(sc.ships, vessels))
     obstacles = [(o.position[0], o.position[1], o.radius) for o in sc.obstacles]
     return Problem(model, model.initial_state(list(ships)), model.pack(list(ships), obstacles, walls), ships)
+
+
+def _ship_inputs(s, hull) -> dict:
+    """The per-ship dict of :func:`~mmg_casadi.closed_loop.layout.pack_params` and
+    :func:`~mmg_casadi.closed_loop.state.initial_state` for scenario ship ``s`` of vessel ``hull``."""
+    n_rpm = propeller_rpm_for_speed(s.speed, hull)
+    legs = [n_rpm] * (1 + len(s.waypoints))
+    if getattr(s, "speeds", None) is not None:
+        legs = [n_rpm] + [propeller_rpm_for_speed(v, hull) for v in s.speeds]
+    return {"n_rpm": n_rpm, "path": [s.start, *s.waypoints], "stays": s.stays, "start": s.start,
+            "heading": s.heading_rad, "speed": s.speed, "leg_rpm": legs}

@@ -14,7 +14,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.closed_loop.compiled import compile_function
+from mmg_casadi.compiled import compile_function
 from mmg_casadi.closed_loop.fleet import build_fleet_step, candidate_radius, neighbour_lists
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.errors import InputError

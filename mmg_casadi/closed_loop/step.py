@@ -14,7 +14,7 @@ ship's service propeller speed, exactly. Hazards (:mod:`mmg_casadi.guidance.haza
 neighbours of the methods; walls add their field to every method's vector; touching either is a collision.
 
 Current and wind (table group "environment", :mod:`mmg_casadi.vessel.environment`): a layout with either (or with
-crab-angle compensation) is :attr:`~mmg_casadi.closed_loop.layout.Layout.disturbed` and its step takes
+crab-angle compensation) is ``Layout.disturbed`` and its step takes
 :data:`~mmg_casadi.closed_loop.layout.ENV_INPUTS` as well; calm layouts keep the calm-water step exactly. The
 state's ``u, v`` are then velocities through the water and the current carries the ship over the ground. What
 guidance does with the disturbance: the fields and the velocity obstacle see every ship's velocity over the
@@ -50,7 +50,7 @@ the reactive guidance was in charge."""
 NAUX = len(AUX)
 
 ENVELOPE = {"speed": 3.0, "r": 5.0, "position": 1.0e4}
-"""The model's envelope: a ship whose speeds (U), yaw rate (U/L) or |x| + |y| (L) leave it has diverged."""
+"""The model's envelope: a ship whose speeds (U), yaw rate (U/L) or ``|x| + |y|`` (L) leave it has diverged."""
 
 
 def _indicator(cond_margin, smooth):
@@ -183,6 +183,9 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
 
     psi_ilos = terms["psi_d"]
     spec = methods.get(method, f"methods[{i}]")
+    n_service = Pi["leg_rpm"][0]  # the propeller speed of the leg being sailed (exact when every leg has one)
+    for k in range(1, layout.max_path):
+        n_service = ca.if_else(Xi[S_["idx"]] > k - 0.5, Pi["leg_rpm"][k], n_service)
     if spec.goal_capture:
         # past its final waypoint (missed outside the acceptance radius) the ship turns back to it instead of
         # following the extended last leg for ever
@@ -213,7 +216,7 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal,
                                 nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=active, P=P,
                                 layout=layout, memory={k: Xi[S_[k]] for k in spec.memory},
-                                service_rpm=Pi["n_rpm"])
+                                service_rpm=n_service)
         if sparse and M > 1:
             command = command_from_vector(spec, within_range(layout, method, M)(ca.sum2(active),
                                                                                *dispatch_args(layout, inputs)))
@@ -229,9 +232,10 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
             psi_d = ca.atan2(e[1], e[0])
 
     delta_c = pd_heading(psi[i], psi_d, Xi[S_["r"]], P["kp"], P["kd"], P["delta_max"])
-    n_c = Pi["n_rpm"]  # the service propeller speed, unless the method in charge commands another
+    n_c = n_service  # the leg's propeller speed, unless the method in charge commands another
     if cmd is not None and spec.commands_speed:
-        n_c = ca.if_else(w_react, cmd[0].rpm, n_c) if sm is None else w_react * cmd[0].rpm + (1 - w_react) * n_c
+        rpm = ca.fmin(ca.fmax(cmd[0].rpm, Pi["rpm_min"]), Pi["rpm_max"])  # dead slow ahead .. maximum rpm
+        n_c = ca.if_else(w_react, rpm, n_c) if sm is None else w_react * rpm + (1 - w_react) * n_c
     n_prop = Xi[S_["n_prop"]]
     xm = Xi[:NX]
     xm_next = rk4(mmg, xm, (delta_c, n_prop, *c["env_args"]), dt / n_sub)
@@ -260,7 +264,7 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         memory.append(psi_next if held is None else ca.if_else(cmd[1], held, psi_next))
     new = ca.vertcat(
         xm_next,
-        engine_step(n_prop, n_c, Pi["engine_rate"], dt),
+        engine_step(n_prop, n_c, Pi["engine_rate"], dt, Pi["engine_lag"]),
         y_int_next,
         idx_next,
         status_new,

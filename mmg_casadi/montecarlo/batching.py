@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mmg_casadi.closed_loop.compiled import library_path
+from mmg_casadi.compiled import library_path
 from mmg_casadi.closed_loop.simulation import compiled_step, rollout_functions
 from mmg_casadi.errors import InputError
 from mmg_casadi.montecarlo.disturbance_sampling import DisturbanceRanges

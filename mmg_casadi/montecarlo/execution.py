@@ -31,7 +31,12 @@ Outcome of a run (own ship = agent 0, judged from the final state):
     whether the own ship kept the COLREGs (profile ``iitm-lab``) in all of its classified encounters with other
     ships, and how many there were (:func:`mmg_casadi.colregs.compliance.own_ship_compliance`, empty without one); judged
     on a history of positions and headings kept every :data:`HISTORY_EVERY` guidance steps by
-    :func:`~mmg_casadi.closed_loop.simulation.simulate_batch_history`.
+    :func:`~mmg_casadi.closed_loop.simulation.simulate_batch_history` (the legacy scorer).
+``colregs_risky``, ``colregs_lawful``, ``colregs_score``
+    the encounter scorer's view (:func:`mmg_casadi.colregs.scorer.score_encounters` with ``own = 0``, profile the
+    parameter ``colregs_profile``) on the same history: how many encounters with a risk of collision the own ship
+    had with other ships (Rule 7 gate; those with at least one applicable rule), how many of them it kept every
+    applicable rule in, and the mean of their graded scores (``nan`` without one); see :func:`own_ship_encounters`.
 
 Outcome, CE and MCTE are judged by :meth:`mmg_casadi.closed_loop.problem.ClosedLoopModel.outcomes`, as for a single
 scenario run (a diverged ship's CE/MCTE are ``nan``; summaries average them over successful runs only). Fleet
@@ -50,11 +55,18 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.closed_loop.simulation import compiled_guidance, simulate_batch, simulate_batch_history
+from mmg_casadi.closed_loop.simulation import (
+    compiled_guidance,
+    sailing_mask,
+    simulate_batch,
+    simulate_batch_history,
+)
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.closed_loop.problem import ClosedLoopModel, build_problem
 from mmg_casadi.colregs.compliance import own_ship_compliance
+from mmg_casadi.colregs.profiles import scoring_profile
+from mmg_casadi.colregs.scorer import score_encounters
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
 from mmg_casadi.montecarlo.failures import failure_mechanism, turn_time_90, unavoidable_at_start
 from mmg_casadi.montecarlo.results import RUN_COLUMNS
@@ -190,8 +202,57 @@ HISTORY_EVERY = 2
 """The batch rollout keeps every 2nd guidance step (0.5 L/U) of positions and headings for the COLREG scoring."""
 
 
+def own_ship_encounters(t, states, profile=None) -> dict:
+    """``colregs_risky``, ``colregs_lawful`` and ``colregs_score`` of one run: the own ship's (ship 0) encounters
+    with a risk of collision, judged by :func:`~mmg_casadi.colregs.scorer.score_encounters`.
+
+    Only the ships that come within the profile's risk range ``r_risk`` of the own ship while both sail are
+    scored (a ship farther away has no risk of collision and no duty; the verdicts are the same).
+
+    Parameters
+    ----------
+    t : array (K,)
+        Sample times (L/U).
+    states : array (K, N, 4)
+        ``x``, ``y`` (L), ``psi`` (rad) and ``status`` of every ship (ship 0 the own ship), as kept by
+        :func:`mmg_casadi.closed_loop.simulation.simulate_batch_history`.
+    profile : ScoringProfile or str, optional
+        Scoring profile or its name (default ``"iitm-lab"``).
+
+    Returns
+    -------
+    dict
+        ``colregs_risky`` (int), ``colregs_lawful`` (int) and ``colregs_score`` (float, ``nan`` if no risky one).
+
+    Examples
+    --------
+    Head-on 2 L abeam, nobody alters course: one risky encounter, not kept (Rule 14 needs a starboard turn).
+
+    >>> t = np.linspace(0.0, 40.0, 81)
+    >>> own = np.column_stack([t, 0 * t, 0 * t, 0 * t])
+    >>> other = np.column_stack([50.0 - t, 2.0 + 0 * t, np.pi + 0 * t, 0 * t])
+    >>> r = own_ship_encounters(t, np.stack([own, other], axis=1))
+    >>> r["colregs_risky"], r["colregs_lawful"], r["colregs_score"] < 0.5
+    (1, 0, True)
+    """
+    profile = scoring_profile(profile)
+    t = np.asarray(t, float)
+    states = np.asarray(states, float)
+    mask = sailing_mask(states[:, :, 3])
+    dist = np.linalg.norm(states[:, 1:, :2] - states[:, :1, :2], axis=2)
+    near = np.any((dist <= profile.r_risk) & mask[:, :1] & mask[:, 1:], axis=0)
+    ships = [0, *(1 + np.flatnonzero(near))]
+    risky = []
+    if len(ships) > 1 and t.size > 1:  # one sample has no velocity, hence no risk of collision
+        risky = [e for e in score_encounters(t, states[:, ships, :2], states[:, ships, 2], active=mask[:, ships],
+                                             profile=profile, own=0) if e.applicable and e.compliant is not None]
+    return {"colregs_risky": len(risky), "colregs_lawful": sum(1 for e in risky if e.compliant),
+            "colregs_score": float(np.mean([e.score for e in risky])) if risky else math.nan}
+
+
 def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
-    """``failure_mechanism``, ``colregs_compliant`` and ``colregs_encounters`` of one run.
+    """``failure_mechanism``, ``colregs_compliant``, ``colregs_encounters`` (legacy scorer) and
+    ``colregs_risky``, ``colregs_lawful``, ``colregs_score`` (:func:`own_ship_encounters`) of one run.
 
     Parameters
     ----------
@@ -230,7 +291,8 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
                              near_goal_distance=float(P["near_goal_distance"]), unavoidable=unavoidable)
     compliant, n = own_ship_compliance(t, states, r_safe=float(P["r_safe"]),
                                        collision_distance=float(P["collision_distance"]))
-    return {"failure_mechanism": mech, "colregs_compliant": compliant, "colregs_encounters": n}
+    return {"failure_mechanism": mech, "colregs_compliant": compliant, "colregs_encounters": n,
+            **own_ship_encounters(t, states, P["colregs_profile"])}
 
 
 def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT_CHUNK,

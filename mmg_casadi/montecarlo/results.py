@@ -4,7 +4,8 @@ One CSV row per (environment, method, run) with the columns :data:`RUN_COLUMNS`.
 appends rows durably (flush + fsync per append), skips rows already stored, and tolerates a truncated last
 line left by a killed process. :func:`summarize` reduces the rows to one line per (environment, method)
 with the paper's statistics: success rate with a Wilson score interval and means of time to goal, CE,
-MCTE and guidance-call time with normal-approximation 95 % confidence intervals.
+MCTE and guidance-call time with normal-approximation 95 % confidence intervals, the legacy run-level COLREG
+compliance and the encounter scorer's per-encounter compliance (Wilson interval) and mean graded score.
 """
 
 from __future__ import annotations
@@ -29,12 +30,14 @@ RUN_COLUMNS: tuple[str, ...] = (
     "min_distance", "guidance_call_us", "n_ships", "n_obstacles",
     "current_speed", "current_direction_deg", "wind_speed", "wind_direction_deg",
     "failure_mechanism", "colregs_compliant", "colregs_encounters",
+    "colregs_risky", "colregs_lawful", "colregs_score",
 )
 """Columns of the results CSV, in order (version :data:`RESULTS_VERSION`)."""
 
-RESULTS_VERSION = 2
+RESULTS_VERSION = 3
 """Version of :data:`RUN_COLUMNS`: 2 added ``failure_mechanism``, ``colregs_compliant`` and
-``colregs_encounters``; a table of another version is refused, never misread."""
+``colregs_encounters`` (the legacy scorer); 3 added the encounter scorer's ``colregs_risky``, ``colregs_lawful``
+and ``colregs_score``; a table of another version is refused, never misread."""
 
 MECHANISMS: tuple[str, ...] = failure_mechanisms.MECHANISMS
 """Allowed non-empty values of ``failure_mechanism`` (:data:`mmg_casadi.montecarlo.failures.MECHANISMS`)."""
@@ -45,7 +48,8 @@ KEY_COLUMNS: tuple[str, str, str] = ("environment", "method", "run")
 FAILURES: tuple[str, ...] = ("", *RUN_FAILURES)
 """Allowed values of the ``failure`` column (``""`` for a successful run)."""
 
-_INT_COLUMNS = frozenset({"environment", "run", "seed", "n_ships", "n_obstacles", "colregs_encounters"})
+_INT_COLUMNS = frozenset({"environment", "run", "seed", "n_ships", "n_obstacles", "colregs_encounters",
+                          "colregs_risky", "colregs_lawful"})
 _BOOL_COLUMNS = frozenset({"success", "fleet_success", "colregs_compliant"})
 _STR_COLUMNS = frozenset({"method", "failure", "failure_pair", "failure_mechanism"})
 _FLOAT_COLUMNS = frozenset(RUN_COLUMNS) - _INT_COLUMNS - _BOOL_COLUMNS - _STR_COLUMNS
@@ -59,6 +63,8 @@ SUMMARY_COLUMNS: tuple[str, ...] = (
     "environment", "method", "runs", "success_rate", "success_ci_low", "success_ci_high",
     *(f"{m}_{s}" for m in METRICS for s in ("mean", "ci_low", "ci_high")),
     "compliance_runs", "compliance_rate", "compliance_ci_low", "compliance_ci_high",
+    "colregs_risky", "colregs_lawful", "colregs_encounter_rate", "colregs_encounter_ci_low",
+    "colregs_encounter_ci_high", "colregs_score_mean",
     *(f"failures_{m.replace('-', '_')}" for m in MECHANISMS),
 )
 """Columns of :meth:`Summary.to_csv`, in order."""
@@ -404,13 +410,14 @@ class Summary:
         >>> rows = [{"environment": 1, "method": "apf", "run": i, "success": i > 0, "time_to_goal": 60.0 + i,
         ...          "ce": 0.1, "guidance_call_us": 3.0} for i in range(4)]
         >>> print(summarize(rows).to_markdown())
-        | Env | Method | Runs | Success [%] | Time to goal [L/U] | CE | MCTE [L] | Guidance call [µs] | COLREG-compliant [%] (runs) |
-        |---:|:---|---:|:---|:---|:---|:---|:---|:---|
-        | 1 | apf | 4 | 75.0 [30.1, 95.4] | 62.0 [60.9, 63.1] | 0.100 [0.100, 0.100] | n/a [n/a, n/a] | 3.00 [3.00, 3.00] | n/a (0) |
+        | Env | Method | Runs | Success [%] | Time to goal [L/U] | CE | MCTE [L] | Guidance call [µs] | COLREG-compliant [%] (runs) | COLREG encounters kept [%] (risky) | COLREG score |
+        |---:|:---|---:|:---|:---|:---|:---|:---|:---|:---|:---|
+        | 1 | apf | 4 | 75.0 [30.1, 95.4] | 62.0 [60.9, 63.1] | 0.100 [0.100, 0.100] | n/a [n/a, n/a] | 3.00 [3.00, 3.00] | n/a (0) | n/a (0) | n/a |
         """
         head = ["Env", "Method", "Runs", "Success [%]", "Time to goal [L/U]", "CE", "MCTE [L]",
-                "Guidance call [µs]", "COLREG-compliant [%] (runs)"]
-        lines = ["| " + " | ".join(head) + " |", "|---:|:---|---:|" + ":---|" * 6]
+                "Guidance call [µs]", "COLREG-compliant [%] (runs)", "COLREG encounters kept [%] (risky)",
+                "COLREG score"]
+        lines = ["| " + " | ".join(head) + " |", "|---:|:---|---:|" + ":---|" * 8]
         for r in self.rows:
             success = (f"{100 * r['success_rate']:.1f} [{100 * r['success_ci_low']:.1f}, "
                        f"{100 * r['success_ci_high']:.1f}]")
@@ -420,6 +427,10 @@ class Summary:
             n_c = r.get("compliance_runs", 0)
             cells.append(f"{100 * r['compliance_rate']:.1f} [{100 * r['compliance_ci_low']:.1f}, "
                          f"{100 * r['compliance_ci_high']:.1f}] ({n_c})" if n_c else "n/a (0)")
+            n_e = r.get("colregs_risky", 0)
+            cells.append(f"{100 * r['colregs_encounter_rate']:.1f} [{100 * r['colregs_encounter_ci_low']:.1f}, "
+                         f"{100 * r['colregs_encounter_ci_high']:.1f}] ({n_e})" if n_e else "n/a (0)")
+            cells.append(_sig3(r.get("colregs_score_mean", math.nan)))
             lines.append("| " + " | ".join(cells) + " |")
         return "\n".join(lines)
 
@@ -469,6 +480,12 @@ def summarize(rows) -> Summary:
     runs (finite values); each with the normal-approximation interval ``mean ± 1.96 * s / sqrt(n)``
     (``s`` the sample standard deviation, ``n`` the number of values; ``nan`` when ``n < 2``).
 
+    COLREGs: ``compliance_*`` is the legacy run-level rate (runs with ``colregs_compliant`` true among those with a
+    verdict, Wilson interval). ``colregs_encounter_rate`` is the encounter scorer's per-encounter rate,
+    ``sum(colregs_lawful) / sum(colregs_risky)`` over the runs, with a Wilson interval (``nan`` without a risky
+    encounter), and ``colregs_score_mean`` the mean graded score over those encounters (each run's
+    ``colregs_score`` weighted by its ``colregs_risky``).
+
     Parameters
     ----------
     rows : iterable of dict
@@ -513,7 +530,26 @@ def summarize(rows) -> Summary:
         clo, chi = wilson_interval(kc, len(judged)) if judged else (math.nan, math.nan)
         summary.update({"compliance_runs": len(judged), "compliance_rate": kc / len(judged) if judged else math.nan,
                         "compliance_ci_low": clo, "compliance_ci_high": chi})
+        summary.update(_encounter_summary(group))
         for mech in MECHANISMS:
             summary[f"failures_{mech.replace('-', '_')}"] = sum(1 for r in group if r.get("failure_mechanism") == mech)
         out.append(summary)
     return Summary(rows=out)
+
+
+def _encounter_summary(group: list) -> dict:
+    """The per-encounter COLREG columns of one summary row (:func:`summarize`) from its runs."""
+    counted = [r for r in group if isinstance(r.get("colregs_risky"), int) and r["colregs_risky"] > 0]
+    risky = sum(r["colregs_risky"] for r in counted)
+    lawful = sum(int(r.get("colregs_lawful") or 0) for r in counted)
+    if not risky:
+        return {"colregs_risky": 0, "colregs_lawful": 0, "colregs_encounter_rate": math.nan,
+                "colregs_encounter_ci_low": math.nan, "colregs_encounter_ci_high": math.nan,
+                "colregs_score_mean": math.nan}
+    low, high = wilson_interval(lawful, risky)
+    weighted = [(r["colregs_risky"], float(r["colregs_score"])) for r in counted
+                if r.get("colregs_score") is not None and math.isfinite(float(r["colregs_score"]))]
+    n_scored = sum(n for n, _ in weighted)
+    return {"colregs_risky": risky, "colregs_lawful": lawful, "colregs_encounter_rate": lawful / risky,
+            "colregs_encounter_ci_low": low, "colregs_encounter_ci_high": high,
+            "colregs_score_mean": math.fsum(n * x for n, x in weighted) / n_scored if n_scored else math.nan}

@@ -228,7 +228,7 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
     summary = summarize(rows)
     summary.to_csv(out / "summary.csv")
     # scipy.stats (about 0.7 s to import): imported only when a study is written, not by `import mmg_casadi`
-    from mmg_casadi.montecarlo.comparisons import compare_methods, to_markdown, write_csv
+    from mmg_casadi.montecarlo.comparisons import compare_methods, to_markdown, write_csv  # scipy.stats: ~1 s
     comparisons = compare_methods(rows, methods)
     write_csv(comparisons, out / "comparisons.csv")
     (out / "summary.md").write_text(

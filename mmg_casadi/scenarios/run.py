@@ -6,14 +6,28 @@
      "ships": [{"name", "method", "status": "reached"|"diverged"|"stalled"|"timeout",
                 "reached_goal": bool, "time_to_goal": float|null, "ce": float, "mcte": float,
                 "collided": bool, "collision_time": float|null, "collision_with": str|null,
-                "collision_kind": "ship"|"obstacle"|"wall"|null,
+                "collision_kind": "ship"|"obstacle"|"wall"|null, "min_speed": float,
+                "reduced_speed_time": float, "delay": float|null,
                 "min_distance": float, "stalled_at": [x, y]|null, "reactive_time": float}],
      "pairs": [{"a", "b", "min_distance", "t_min", "encounter", "compliant",
-                "encounter_b", "compliant_b", "t_enter", "rules"}]}
+                "encounter_b", "compliant_b", "t_enter", "rules",
+                "encounters": {"a": [Encounter.to_dict()], "b": [Encounter.to_dict()]}}]}
 
-``encounter``/``compliant`` are from ship ``a``'s side (``encounter_b``/``compliant_b`` from ``b``'s);
-static obstacles appear as ``b = "obstacle<k>"`` with encounter ``"static"`` (no ``rules``). ``rules`` is the
-rule-by-rule COLREG scoring of a ship pair under the chosen profile (:func:`mmg_casadi.colregs.score.score_pair`).
+``encounters`` is the encounter scorer's judgement of a ship pair (:func:`mmg_casadi.colregs.scorer.score_encounters`,
+under the parameter ``colregs_profile`` recorded in ``params``): per side, ``"a"`` from ship ``a``'s view and
+``"b"`` from ``b``'s, a list of :meth:`~mmg_casadi.colregs.scorer.Encounter.to_dict` entries, one per stretch of
+risk of collision (``applicable``, ``onset``, ``release``, ``closest``, ``encounter``, ``role``, per rule of
+:data:`~mmg_casadi.colregs.verdict.RULES` its ``verdict`` and ``score`` or ``null``, the total ``score``,
+``compliant``, ``conflicting_duties`` and the ``quantities`` behind them), or a single entry with
+``applicable: false`` if the side never had a risk of collision. A ship's duties towards several ships are judged
+together over every ship it is paired with (all of them; in a fleet scenario those that came within R_safe), so
+conflicting duties (Rule 2(b)) are flagged.
+
+The other pair keys are the *legacy scorer*, kept unchanged for now: ``encounter``/``compliant`` are from ship
+``a``'s side (``encounter_b``/``compliant_b`` from ``b``'s) and ``rules`` is the rule-by-rule scoring of
+:func:`mmg_casadi.colregs.score.score_pair` under the legacy profile (the ``profile`` argument of
+:func:`run_scenario`/:func:`assess`, not ``colregs_profile``). Static obstacles appear as ``b = "obstacle<k>"`` with
+encounter ``"static"`` (no ``rules``, no ``encounters``).
 Outcome, CE, MCTE and collisions (with a ship or any hazard, reported by kind) come from the closed loop's one
 judgement, :func:`mmg_casadi.closed_loop.outcome.ship_outcomes` (``ce``/``mcte`` are null for a diverged ship).
 """
@@ -33,6 +47,7 @@ from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.closed_loop.simulation import Trajectory, simulate
 from mmg_casadi.colregs.assess import assess_pair
 from mmg_casadi.colregs.classify import get_profile
+from mmg_casadi.colregs.scorer import score_encounters
 from mmg_casadi.errors import InputError
 from mmg_casadi.io import json_safe, write_json
 from mmg_casadi.scenarios.scenario import Scenario, load_scenario, with_method
@@ -149,7 +164,8 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
     method : str, optional
         Replace the scenario's ``settings.method`` (per-ship overrides are kept).
     profile : ColregProfile or str, optional
-        COLREG threshold profile of the assessment or its name (default: the paper laboratory's).
+        Legacy COLREG threshold profile of the pair keys ``encounter``/``compliant``/``rules`` or its name
+        (default: the paper laboratory's); the encounter scorer's profile is the parameter ``colregs_profile``.
 
     Returns
     -------
@@ -212,8 +228,8 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     params : dict
         The resolved parameter set it ran with (:func:`mmg_casadi.params.resolve`).
     profile : ColregProfile or str, optional
-        COLREG threshold profile or its name (:data:`mmg_casadi.colregs.classify.PROFILES`; default: the paper
-        laboratory's).
+        Legacy COLREG threshold profile or its name (:data:`mmg_casadi.colregs.classify.PROFILES`; default: the
+        paper laboratory's); the ``encounters`` of every pair use ``params["colregs_profile"]`` instead.
     """
     profile = get_profile(profile)
     g = {k: params[k] for k in ("r_safe", "collision_distance")}
@@ -241,6 +257,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
             "min_distance": o["min_distance"],
             "stalled_at": None if o["stalled_at"] is None else list(o["stalled_at"]),
             "reactive_time": o["reactive_time"],
+            **_speed_metrics(s, traj, i, mask[:, i], o["time_to_goal"], params["goal_tolerance"]),
         })
     pairs = []
     labels: dict = {}
@@ -251,6 +268,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     obstacles_of = {i: [] for i in range(N)}
     for i, k in obstacle_pairs:
         obstacles_of[i].append(k)
+    judged = _encounters(traj, mask, names, ship_pairs, params["colregs_profile"])
     for i in range(N):
         pi = np.column_stack([traj.state("x", i), traj.state("y", i)])
         for j in partners[i]:
@@ -261,7 +279,8 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
             pairs.append({"a": names[i], "b": names[j], "min_distance": float(a.min_distance),
                           "t_min": float(a.t_min), "encounter": a.encounter, "compliant": a.compliant,
                           "encounter_b": a.encounter_b, "compliant_b": a.compliant_b,
-                          "t_enter": None if a.t_enter is None else float(a.t_enter), "rules": a.rules})
+                          "t_enter": None if a.t_enter is None else float(a.t_enter), "rules": a.rules,
+                          "encounters": {"a": judged.get((i, j), []), "b": judged.get((j, i), [])}})
             for k, enc, ok in ((i, a.encounter, a.compliant), (j, a.encounter_b, a.compliant_b)):
                 if enc not in (None, "none"):
                     tag = f"{enc} {'✓' if ok else '✗' if ok is not None else ''}".strip()
@@ -278,6 +297,51 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     metrics = {"method": sc.settings.method, "collision": bool(collision), "t_end": t_end,
                "params": dict(params), "ships": ships, "pairs": pairs}
     return ScenarioResult(sc, traj, json_safe(metrics), labels)
+
+
+def _encounters(traj: Trajectory, mask: np.ndarray, names: list, ship_pairs: list, profile: str) -> dict:
+    """``{(own, other): [Encounter.to_dict()]}`` of the encounter scorer for both sides of every reported ship pair.
+
+    Each ship is judged once against all the ships it is paired with (so that its duties towards several ships
+    are judged together), on the trajectory's speeds over the ground and sailing mask.
+    """
+    met: dict = {}
+    if len(traj.t) < 2:  # one sample has no velocity, hence no risk of collision
+        return {}
+    for i, j in ship_pairs:
+        met.setdefault(i, set()).add(j)
+        met.setdefault(j, set()).add(i)
+    x, y, psi = traj.state("x"), traj.state("y"), traj.state("psi")
+    out: dict = {}
+    for i, others in met.items():
+        ships = [i, *sorted(others)]
+        for e in score_encounters(traj.t, np.stack([x[:, ships], y[:, ships]], axis=2), psi[:, ships],
+                                  active=mask[:, ships], profile=profile, names=[names[k] for k in ships], own=0):
+            out.setdefault((i, ships[e.other]), []).append(e.to_dict())
+    return out
+
+
+REDUCED_SPEED = 0.9
+"""A ship sails at reduced speed while its speed through the water is below this fraction of its planned speed."""
+
+
+def _speed_metrics(ship, traj: Trajectory, i: int, sailing: np.ndarray, time_to_goal, r_tol: float) -> dict:
+    """Ship ``i``'s ``min_speed`` (U, through the water, while sailing), ``reduced_speed_time`` (L/U below
+    :data:`REDUCED_SPEED` of the planned speed of the leg sailed) and ``delay`` (time to goal minus the planned
+    voyage time: the legs' lengths over their planned speeds, the last one ending at the goal's acceptance radius
+    ``r_tol``; null if the goal was not reached)."""
+    speed = np.hypot(traj.state("u", i), traj.state("v", i))
+    legs = np.asarray([ship.speed] * len(ship.waypoints) if ship.speeds is None else ship.speeds, float)
+    leg = np.clip(traj.state("idx", i).astype(int) - 1, 0, len(legs) - 1)
+    planned = legs[leg]
+    steps = np.diff(traj.t, append=traj.t[-1])
+    path = np.vstack([ship.start, ship.waypoints])
+    lengths = np.hypot(*np.diff(path, axis=0).T)
+    lengths[-1] = max(lengths[-1] - r_tol, 0.0)
+    voyage = float(np.sum(lengths / legs))
+    return {"min_speed": float(np.min(speed[sailing])) if sailing.any() else None,
+            "reduced_speed_time": float(np.sum(steps[sailing & (speed < REDUCED_SPEED * planned)])),
+            "delay": None if time_to_goal is None else float(time_to_goal) - voyage}
 
 
 def _pairs(sc, traj: Trajectory, mask: np.ndarray, r_safe: float) -> tuple[list, list]:

@@ -19,7 +19,8 @@ times non-dimensional (L/U). A scenario file looks like::
     waypoints = [[50.0, 0.0]]
     # method = "none"            # optional per-ship override of settings.method
     # stays = false              # optional: after reaching its goal the ship stays as an obstacle
-    # vessel = "kcs"             # optional: the ship's hull (mmg-casadi vessels; default the table's 'vessel')
+    # vessel = "kcs"             # optional: the ship's hull (default the table's 'vessel')
+    # speeds = [1.0]             # optional: speed on the leg to each waypoint (default: speed on every leg)
     [[obstacles]]
     position = [25.0, 0.0]
     radius = 0.5
@@ -67,7 +68,7 @@ SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_toleranc
 PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
 """Table parameters kept in :attr:`Settings.params`."""
 SETTINGS_KEYS = ("method",) + tuple(PARAMETERS)
-SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays", "vessel")
+SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays", "vessel", "speeds")
 OBSTACLE_KEYS = ("position", "radius")
 WALL_KEYS = ("points",)
 TOP_KEYS = ("settings", "ships", "obstacles", "walls", "environment")
@@ -180,6 +181,9 @@ class ShipSpec:
         Whether the ship stays at its goal as an obstacle after reaching it.
     vessel : str or None, optional
         The ship's hull (:data:`mmg_casadi.vessel.library.VESSELS`; default: the table's ``vessel``).
+    speeds : tuple of float or None, optional
+        Speed on the leg to each waypoint (fractions of the design speed); ``None``: ``speed`` on every leg. The
+        closed loop orders the propeller speed of each leg's steady speed, which the engine follows.
 
     Examples
     --------
@@ -196,6 +200,7 @@ class ShipSpec:
     method: str | None = None
     stays: bool = False
     vessel: str | None = None
+    speeds: tuple | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "start", _as_point(self.start))
@@ -468,7 +473,13 @@ def _ship(t: dict, i: int) -> ShipSpec:
     if not isinstance(stays, bool):
         raise ScenarioError(f"{p}.stays", "true or false", stays)
     vessel = _string(t["vessel"], f"{p}.vessel", VESSELS) if "vessel" in t else None
-    return ShipSpec(name, start, heading, speed, waypoints, method, stays, vessel)
+    speeds = None
+    if "speeds" in t:
+        allowed = f"a list of {len(waypoints)} speeds (one per waypoint), each in [{lo:g}, {hi:g}] {unit}"
+        if not isinstance(t["speeds"], list) or len(t["speeds"]) != len(waypoints):
+            raise ScenarioError(f"{p}.speeds", allowed, t["speeds"])
+        speeds = tuple(_ranged(v, f"{p}.speeds[{k}]", lo, hi, unit=unit) for k, v in enumerate(t["speeds"]))
+    return ShipSpec(name, start, heading, speed, waypoints, method, stays, vessel, speeds)
 
 
 def _obstacle(t: dict, i: int) -> ObstacleSpec:
@@ -636,6 +647,8 @@ def _ship_dict(ship: ShipSpec) -> dict:
     d["stays"] = ship.stays
     if ship.vessel is not None:
         d["vessel"] = ship.vessel
+    if ship.speeds is not None:
+        d["speeds"] = list(ship.speeds)
     return d
 
 

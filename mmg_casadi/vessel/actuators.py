@@ -49,10 +49,11 @@ def steering_rate(delta, delta_c, T_delta, rate_max, delta_max):
     return saturate((dc - delta) / T_delta, rate_max)  # eq. (delta_dot_equation)
 
 
-def engine_step(n, n_c, rate_max, dt):
-    """Propeller speed after one guidance step: the engine moves towards the command at a bounded rate.
+def engine_step(n, n_c, rate_max, dt, lag=0.0):
+    """Propeller speed after one guidance step: a first-order lag towards the command with a bounded rate.
 
-    ``n_next = n + sat(n_c - n, rate_max dt)``; a command equal to the present speed leaves it exactly unchanged.
+    ``n_next = n + sat((n_c - n)(1 - exp(-dt / lag)), rate_max dt)`` (``lag = 0``: no lag, the rate limit
+    alone); a command equal to the present speed leaves it exactly unchanged.
 
     Parameters
     ----------
@@ -64,10 +65,14 @@ def engine_step(n, n_c, rate_max, dt):
         Largest change of propeller speed per unit time (rev/min per L/U).
     dt : float or casadi.SX or casadi.MX
         Guidance step (L/U).
+    lag : float or casadi.SX or casadi.MX, default 0
+        Time constant of the engine's first-order response (L/U).
 
     Examples
     --------
     >>> float(engine_step(100.0, 50.0, 10.0, 0.25)), float(engine_step(100.0, 99.0, 10.0, 0.25))
     (97.5, 99.0)
+    >>> round(float(engine_step(100.0, 99.0, 10.0, 0.25, lag=0.5)), 4)  # 1 - exp(-0.5) of the way
+    99.6065
     """
-    return n + saturate(n_c - n, rate_max * dt)
+    return n + saturate((n_c - n) * (1 - ca.exp(-dt / ca.fmax(lag, 1e-12))), rate_max * dt)

@@ -1,7 +1,7 @@
 """The vessel library: every hull the closed loop can sail, by name, with its coefficients and steering gear.
 
 A ship of a scenario names its vessel (``vessel = "kcs"``, the default); the closed loop builds one MMG model per
-vessel its layout uses (:attr:`mmg_casadi.closed_loop.layout.Layout.vessels`).
+vessel its layout uses (``Layout.vessels``).
 
 Examples
 --------

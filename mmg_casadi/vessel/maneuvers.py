@@ -1,7 +1,9 @@
-"""Standard manoeuvres of the model: turning circle and zig-zag, rolled out with ``mapaccum`` in compiled code.
+"""Standard manoeuvres of the model: turning circle, zig-zag and speed change, rolled out with ``mapaccum`` in
+compiled code.
 
-Both start from straight running at the requested speed (propeller speed from
-:func:`~mmg_casadi.vessel.mmg.propeller_rpm_for_speed`); the rudder command goes through the steering gear.
+All start from straight running at the requested speed (propeller speed from
+:func:`~mmg_casadi.vessel.mmg.propeller_rpm_for_speed`); the rudder command goes through the steering gear, a
+propeller-speed order through the engine (:func:`~mmg_casadi.vessel.actuators.engine_step`).
 """
 
 from __future__ import annotations
@@ -12,8 +14,10 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.closed_loop.compiled import compile_function
+from mmg_casadi.compiled import compile_function
 from mmg_casadi.errors import ParameterError, check_range
+from mmg_casadi.params import PARAMETERS
+from mmg_casadi.vessel.actuators import engine_step
 from mmg_casadi.vessel.mmg import NX, STATE_NAMES, build_mmg, propeller_rpm_for_speed, rk4
 from mmg_casadi.vessel.ship import ShipParams, SteeringParams, load_kcs, load_steering
 
@@ -80,6 +84,16 @@ def _turning_step(ship: ShipParams, steering: SteeringParams) -> ca.Function:
     x = ca.SX.sym("x", NX)
     p = ca.SX.sym("p", 3)  # delta_c, n_rpm, dt
     return ca.Function("turning_step", [x, p], [rk4(f, x, (p[0], p[1]), p[2]), p[0]])
+
+
+def _speed_step(ship: ShipParams, steering: SteeringParams) -> ca.Function:
+    """Step of the speed change: rudder amidships, the propeller speed (state row ``NX``) follows the order."""
+    f = build_mmg(ship, steering)
+    x = ca.SX.sym("x", NX + 1)
+    p = ca.SX.sym("p", 4)  # ordered rpm, rate (rpm per L/U), lag (L/U), dt
+    n = x[NX]
+    xn = rk4(f, x[:NX], (0.0, n), p[3])
+    return ca.Function("speed_step", [x, p], [ca.vertcat(xn, engine_step(n, p[0], p[1], p[3], p[2])), n])
 
 
 def _roll(step: ca.Function, x0, p, n_steps: int):
@@ -256,13 +270,90 @@ def zigzag_metrics(res: ManeuverResult, sign: np.ndarray, angle_deg: float) -> d
     }
 
 
+SPEED_BAND = 0.05
+"""A speed change is complete when the speed is within this fraction of the change from the new steady speed."""
+
+
+def speed_change(to_speed: float = 0.5, *, speed: float = 1.0, t_end: float = 120.0,
+                 ship: ShipParams | None = None, steering: SteeringParams | None = None) -> ManeuverResult:
+    """Speed change on a straight course: from steady running at ``speed``, the propeller speed is ordered to that
+    of a steady ``to_speed`` and follows it through the engine (rate ``engine_rate_rpm_s``, lag
+    ``engine_lag_s``, the table's defaults); the rudder stays amidships.
+
+    Metrics: ``rpm_from``/``rpm_to`` (rev/min), ``final_speed`` (U/U_des at ``t_end``), ``t_engine``
+    (time until the propeller reaches the order within 1 %), ``t_change`` and ``reach_change`` (time and distance
+    run until the speed is within :data:`SPEED_BAND` of the change from ``to_speed``), in L/U and L and in s and m.
+
+    Parameters
+    ----------
+    to_speed : float
+        New speed (fraction of the design speed, [0.2, 1.2]).
+    speed : float
+        Approach speed (fraction of the design speed, [0.2, 1.2]).
+    t_end : float
+        Duration (L/U).
+    ship, steering : ShipParams, SteeringParams, optional
+        Ship and steering gear (default: the KCS).
+
+    Examples
+    --------
+    >>> r = speed_change(0.5)
+    >>> round(r.metrics["final_speed"], 3), r.metrics["t_change"] > r.metrics["t_engine"]
+    (0.5, True)
+    """
+    ship = ship or load_kcs()
+    steering = steering or load_steering()
+    check_range("speed", speed, 0.2, 1.2, unit="(fraction of design speed)")
+    check_range("to_speed", to_speed, 0.2, 1.2, unit="(fraction of design speed)")
+    check_range("t_end", t_end, 0.0, 1000.0, low_open=True, unit="L/U")
+    n0, n1 = propeller_rpm_for_speed(speed, ship), propeller_rpm_for_speed(to_speed, ship)
+    rate = PARAMETERS["engine_rate_rpm_s"].default * ship.time_scale_s
+    lag = PARAMETERS["engine_lag_s"].default / ship.time_scale_s
+    steps = int(round(t_end / DT))
+    X, _ = _roll(_speed_step(ship, steering), [speed, 0, 0, 0, 0, 0, 0, n0], [n1, rate, lag, DT], steps)
+    t = np.arange(X.shape[1]) * DT
+    res = ManeuverResult("speed", t, X[:NX].T, np.zeros(X.shape[1]))
+    res.metrics = speed_metrics(res, X[NX], speed, to_speed, n0, n1, ship)
+    return res
+
+
+def speed_metrics(res: ManeuverResult, n: np.ndarray, speed: float, to_speed: float, n0: float, n1: float,
+                  ship: ShipParams) -> dict:
+    """Metrics of :func:`speed_change` (see there).
+
+    Parameters
+    ----------
+    res : ManeuverResult
+        The manoeuvre's time history.
+    n : numpy.ndarray
+        Propeller speed at each sample (rev/min).
+    speed, to_speed : float
+        Approach and new speed (fractions of the design speed).
+    n0, n1 : float
+        Approach and ordered propeller speed (rev/min).
+    ship : ShipParams
+        The ship (its length and time scale convert to m and s).
+    """
+    u = res.state("u")
+    band = SPEED_BAND * abs(speed - to_speed)
+    out_of_band = np.flatnonzero(np.abs(u - to_speed) > band)
+    k = min(len(u) - 1, out_of_band[-1] + 1) if len(out_of_band) else 0
+    k_engine = int(np.argmax(np.abs(n - n1) <= 0.01 * abs(n1 - n0) + 1e-12))
+    reach = float(res.state("x")[k])
+    ts = ship.time_scale_s
+    return {"kind": "speed", "speed": speed, "to_speed": to_speed, "rpm_from": n0, "rpm_to": n1,
+            "final_speed": float(u[-1]), "t_engine": float(res.t[k_engine]), "t_change": float(res.t[k]),
+            "reach_change": reach, "t_change_s": float(res.t[k]) * ts, "reach_change_m": reach * ship.L,
+            "t_engine_s": float(res.t[k_engine]) * ts, "units": {"times": "L/U_des", "lengths": "L"}}
+
+
 def validate_maneuver_args(kind: str) -> None:
     """Raise :class:`ParameterError` for an unknown manoeuvre name.
 
     Parameters
     ----------
     kind : str
-        Manoeuvre name; ``'turning'`` or ``'zigzag'`` is accepted.
+        Manoeuvre name; ``'turning'``, ``'zigzag'`` or ``'speed'`` is accepted.
     """
-    if kind not in ("turning", "zigzag"):
-        raise ParameterError("maneuver", "one of: turning, zigzag", kind)
+    if kind not in ("turning", "zigzag", "speed"):
+        raise ParameterError("maneuver", "one of: turning, zigzag, speed", kind)

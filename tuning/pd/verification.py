@@ -15,7 +15,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.closed_loop.compiled import compile_function
+from mmg_casadi.compiled import compile_function
 from mmg_casadi.errors import check_range
 from mmg_casadi.guidance.heading_control import pd_heading
 from mmg_casadi.scenarios.encounters import waypoint_square as square_scenario
