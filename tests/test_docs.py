@@ -161,14 +161,16 @@ def check_site(html: Path) -> None:
     from mmg_casadi.scenarios.scenario import OBSTACLE_KEYS, SETTINGS_KEYS, SHIP_KEYS, WALL_KEYS
     formats = _text((html / "formats.html").read_text(encoding="utf-8"))
     for name in (*SHIP_KEYS, *SETTINGS_KEYS, *OBSTACLE_KEYS, *WALL_KEYS, *RUN_COLUMNS, *SUMMARY_COLUMNS,
-                 *OUTCOMES, *RUN_FAILURES, *MECHANISMS, "collision_kind", "encounters"):
+                 *OUTCOMES, *RUN_FAILURES, *MECHANISMS):
         assert f" {name} " in formats, f"formats: {name} is not described"
+    for key in ("collision_kind", "encounters", "reactive_time", "t_enter"):  # the metrics.json schema
+        assert re.search(rf"\b{key}\b", formats), f"formats: metrics.json key {key} is not described"
     # Theory: equations rendered by MathJax, with the paper's labels and links to the functions.
     theory = (html / "theory.html").read_text(encoding="utf-8")
     assert theory.count('class="math notranslate nohighlight"') >= 15, "theory: too few equations"
     assert "mathjax" in theory.lower()
     for label in ("mmg_nd", "psi_desired", "PD_control", "modified_vortex", "factor_f"):
-        assert f'id="equation-{label.lower()}"' in theory.lower(), f"theory: no equation ({label})"
+        assert f'id="equation-{label.lower().replace("_", "-")}"' in theory, f"theory: no equation ({label})"
     assert "mmg_casadi.guidance.velocity_obstacle.velocity_obstacle" in theory
     # References and changelog.
     refs = _text((html / "references.html").read_text(encoding="utf-8"))
