@@ -34,11 +34,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, SHIP_PARAMS, Layout
-from mmg_casadi.closed_loop.step import AUX, ENVELOPE, NAUX, _models, _ship_update
-from mmg_casadi.guidance import hazards
-from mmg_casadi.vessel import environment
+from mmg_casadi.closed_loop.step import _ROW, ENVELOPE, NAUX, _models, _ship_update, meet, ship_kinematics
 
-_ROW = ("d_min", "d_min_with", "t_collision", "collision_with")
 AGENT_ROWS = 6
 """Rows of the agent table the slots are gathered from: position (2), velocity over the ground (2), presence,
 radius."""
@@ -130,17 +127,12 @@ def _ship_context(layout: Layout, sym: dict) -> tuple[dict, dict]:
     P["walls"] = ca.reshape(sym["walls"], 4, layout.n_walls)
     S_ = {name: layout.column(name) for name in layout.ship_state}
     Xi, t = sym["x"], sym["t"]
-    E, env_args = None, ()
-    vel = ca.vertcat(Xi[S_["u"]] * ca.cos(Xi[S_["psi"]]) - Xi[S_["v"]] * ca.sin(Xi[S_["psi"]]),
-                     Xi[S_["u"]] * ca.sin(Xi[S_["psi"]]) + Xi[S_["v"]] * ca.cos(Xi[S_["psi"]]))
+    E, env_args = (sym["env"], (sym["env"][0:4],)) if layout.disturbed else (None, ())
     if layout.disturbed:
-        E = sym["env"]
         P["env"] = E
-        env_args = (E[0:4],)
-        vel = ca.vertcat(*environment.velocity_over_ground(Xi[S_["u"]], Xi[S_["v"]], Xi[S_["psi"]], E[0], E[1]))
+    pos, vel, present = ship_kinematics(Xi, S_, E, Pi["stays"])
     running = t < P["t_max"] - 1e-9
-    present = ca.if_else(Xi[S_["status"]] == 0, 1, ca.if_else(Xi[S_["status"]] == 1, Pi["stays"], 0))
-    c = {"P": P, "S": S_, "t": t, "X": [Xi], "pos": [ca.vertcat(Xi[S_["x"]], Xi[S_["y"]])], "psi": [Xi[S_["psi"]]],
+    c = {"P": P, "S": S_, "t": t, "X": [Xi], "pos": [pos], "psi": [Xi[S_["psi"]]],
          "vel": [vel], "E": E, "env_args": env_args, "running": running,
          "sailing": [ca.logic_and(Xi[S_["status"]] == 0, running)], "present": [present]}
     return c, S_
@@ -154,7 +146,7 @@ def _combos(layout: Layout) -> list[tuple[str, str]]:
 @functools.lru_cache(maxsize=16)
 def _ship_functions(layout: Layout) -> dict:
     """Per-ship Functions of the fleet step: prelude, update (one per (method, vessel)), hold, bookkeeping."""
-    K, W = layout.neighbours, layout.n_walls
+    K = layout.neighbours
     sym = _ship_symbols(layout)
     c, S_ = _ship_context(layout, sym)
     args = [sym[k] for k in ("x", "sp", "g", "walls", "env", "t", "nb")]
@@ -172,31 +164,16 @@ def _ship_functions(layout: Layout) -> dict:
     # bookkeeping: closest approach among the slots and first collision with a slot or a wall, after the step
     xn, nb_vec, nb_idx = ca.SX.sym("xn", layout.ns), ca.SX.sym("nb_next", 3 * K), ca.SX.sym("nb_idx", K)
     nb_next = ca.reshape(nb_vec, 3, K)
-    P, t = c["P"], sym["t"]
-    pos_n = ca.vertcat(xn[S_["x"]], xn[S_["y"]])
-    d_min, d_with = xn[S_["d_min"]], xn[S_["d_min_with"]]
-    t_col, c_with = xn[S_["t_collision"]], xn[S_["collision_with"]]
-    counts_i, running = c["present"][0], c["running"]
-    for k in range(K):
-        dij = ca.norm_2(pos_n - nb_next[0:2, k])
-        valid = ca.logic_and(ca.logic_and(counts_i, nb_next[2, k]), running)
-        closer = ca.logic_and(valid, dij < d_min)
-        d_min = ca.if_else(closer, dij, d_min)
-        d_with = ca.if_else(closer, nb_idx[k], d_with)
-        hit = ca.logic_and(ca.logic_and(valid, dij < P["collision_distance"]), t_col < 0)
-        t_col = ca.if_else(hit, t + P["dt"], t_col)
-        c_with = ca.if_else(hit, nb_idx[k], c_with)
-    wall = hazards.KINDS["wall"]
-    for k in range(W):
-        d = wall.distance(pos_n, P["walls"][:, k])
-        hit = ca.logic_and(ca.logic_and(ca.logic_and(counts_i, running), d < P["ships"][0]["half_beam"]), t_col < 0)
-        t_col = ca.if_else(hit, t + P["dt"], t_col)
-        c_with = ca.if_else(hit, layout.n_ships + layout.n_obstacles + k, c_with)
+    P = c["P"]
+    rows = tuple(xn[S_[k]] for k in _ROW)
+    slots = [(nb_idx[k], nb_next[0:2, k], nb_next[2, k]) for k in range(K)]
+    met = meet(layout, P, ca.vertcat(xn[S_["x"]], xn[S_["y"]]), rows, c["present"][0], c["running"], sym["t"],
+               slots, P["ships"][0]["half_beam"])
     r0, r1 = layout.column(_ROW[0]), layout.column(_ROW[-1]) + 1
     book_args = [sym["x"], sym["sp"], sym["g"], sym["walls"], sym["t"], xn, nb_vec, nb_idx]
-    meet = ca.Function(f"fleet_meet_{key}", book_args, [ca.vertcat(d_min, d_with, t_col, c_with)], {"cse": True})
+    update = ca.Function(f"fleet_meet_{key}", book_args, [met], {"cse": True})
     keep = ca.Function(f"fleet_keep_{key}", book_args, [xn[r0:r1]])
-    return {"pre": pre, "updates": updates, "hold": hold, "meet": meet, "keep": keep}
+    return {"pre": pre, "updates": updates, "hold": hold, "meet": update, "keep": keep}
 
 
 def _gather(table, nbr, rows: int):

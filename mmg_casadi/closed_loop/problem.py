@@ -5,7 +5,6 @@ of a scenario, consumed by simulation, the Monte Carlo, Imazu's problems and tun
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 
 import casadi as ca

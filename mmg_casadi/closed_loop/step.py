@@ -35,7 +35,7 @@ import casadi as ca
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.closed_loop.neighbours import dispatch_args, within_range
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.guidance import fields, hazards, methods
+from mmg_casadi.guidance import hazards, methods
 from mmg_casadi.guidance.heading_control import pd_heading
 from mmg_casadi.guidance.ilos import ilos_step_terms, switch_waypoint
 from mmg_casadi.guidance.methods import GuidanceInputs, command_from_vector
@@ -112,6 +112,30 @@ def _models(layout: Layout) -> dict:
     return out
 
 
+def ship_kinematics(Xi, S_: dict, E, stays):
+    """One ship's position, velocity over the ground (through the water plus the current ``E`` when disturbed)
+    and presence as an obstacle: while sailing, or after its goal if it ``stays``; a diverged ship is removed.
+
+    Parameters
+    ----------
+    Xi : SX
+        The ship's rows of the scenario state.
+    S_ : dict
+        Column of each state name in ``Xi``.
+    E : SX or None
+        The disturbance inputs of a disturbed layout (:data:`~mmg_casadi.closed_loop.layout.ENV_INPUTS`).
+    stays : SX
+        1 if the ship stays as an obstacle after reaching its goal.
+    """
+    u, v, psi, status = Xi[S_["u"]], Xi[S_["v"]], Xi[S_["psi"]], Xi[S_["status"]]
+    if E is None:
+        vel = ca.vertcat(u * ca.cos(psi) - v * ca.sin(psi), u * ca.sin(psi) + v * ca.cos(psi))
+    else:  # u, v are through the water; guidance sees velocities over the ground
+        vel = ca.vertcat(*environment.velocity_over_ground(u, v, psi, E[0], E[1]))
+    present = ca.if_else(status == 0, 1, ca.if_else(status == 1, stays, 0))
+    return ca.vertcat(Xi[S_["x"]], Xi[S_["y"]]), vel, present
+
+
 def _step_context(layout: Layout, x, p, shared=None) -> dict:
     """Named pieces of a step's inputs: parameters, time, ship states, positions, velocities over the ground,
     whether each ship sails and is present as an obstacle (from ``shared`` = per ship ``[x, y, v_x, v_y,
@@ -122,29 +146,16 @@ def _step_context(layout: Layout, x, p, shared=None) -> dict:
     t = x[0]
     X = [x[layout.ship_block(i)] for i in range(N)]
     psi = [Xi[S_["psi"]] for Xi in X]
-    E, env_args = None, ()
+    E, env_args = (P["env"], (P["env"][0:4],)) if layout.disturbed else (None, ())
     if shared is None:
-        pos = [ca.vertcat(Xi[S_["x"]], Xi[S_["y"]]) for Xi in X]
-        vel = [ca.vertcat(Xi[S_["u"]] * ca.cos(Xi[S_["psi"]]) - Xi[S_["v"]] * ca.sin(Xi[S_["psi"]]),
-                          Xi[S_["u"]] * ca.sin(Xi[S_["psi"]]) + Xi[S_["v"]] * ca.cos(Xi[S_["psi"]])) for Xi in X]
+        pos, vel, present = map(list, zip(*(ship_kinematics(Xi, S_, E, P["ships"][i]["stays"])
+                                            for i, Xi in enumerate(X))))
     else:
         pos = [shared[5 * i: 5 * i + 2] for i in range(N)]
         vel = [shared[5 * i + 2: 5 * i + 4] for i in range(N)]
-    if layout.disturbed:  # u, v are through the water; guidance sees velocities over the ground
-        E = P["env"]
-        env_args = (E[0:4],)
-        if shared is None:
-            vel = [ca.vertcat(*environment.velocity_over_ground(Xi[S_["u"]], Xi[S_["v"]], Xi[S_["psi"]], E[0], E[1]))
-                   for Xi in X]
+        present = [shared[5 * i + 4] for i in range(N)]
     running = t < P["t_max"] - 1e-9
     sailing = [ca.logic_and(Xi[S_["status"]] == 0, running) for Xi in X]
-    if shared is None:
-        # A ship is present as an obstacle while sailing, or after its goal if it stays; a diverged ship is removed.
-        present = [ca.if_else(Xi[S_["status"]] == 0, 1,
-                              ca.if_else(Xi[S_["status"]] == 1, P["ships"][i]["stays"], 0))
-                   for i, Xi in enumerate(X)]
-    else:
-        present = [shared[5 * i + 4] for i in range(N)]
     return {"P": P, "S": S_, "t": t, "X": X, "pos": pos, "psi": psi, "vel": vel, "E": E, "env_args": env_args,
             "running": running, "sailing": sailing, "present": present}
 
@@ -305,18 +316,44 @@ def _encounter_row(layout: Layout, c: dict, x_next: list, i: int):
     :data:`~mmg_casadi.guidance.hazards.KINDS`) after the step."""
     N, S = layout.n_ships, layout.n_obstacles
     P, S_, t, present, running = c["P"], c["S"], c["t"], c["present"], c["running"]
-    dt = P["dt"]
     obs = P["obstacles"]
     pos_n = [ca.vertcat(xn[S_["x"]], xn[S_["y"]]) for xn in x_next]
     xn = x_next[i]
     d_min, d_with = xn[S_["d_min"]], xn[S_["d_min_with"]]
     t_col, c_with = xn[S_["t_collision"]], xn[S_["collision_with"]]
-    counts_i = present[i]
     agents = [(j, pos_n[j], present[j]) for j in range(N) if j != i]
     agents += [(N + k, obs[0:2, k], ca.SX(1)) for k in range(S)]
+    return meet(layout, P, pos_n[i], (d_min, d_with, t_col, c_with), present[i], running, t, agents,
+                P["ships"][i]["half_beam"])
+
+
+def meet(layout: Layout, P: dict, pos, rows, counts, running, t, agents, half_beam):
+    """A ship's closest approach (and with whom) and first collision (when, with whom) after a step.
+
+    Parameters
+    ----------
+    layout : Layout
+        The closed loop's shape (its walls; agent indices of walls follow ships and obstacles).
+    P : dict
+        The step's named parameters (``dt``, ``collision_distance``, ``walls``).
+    pos : SX (2×1)
+        The ship's position after the step.
+    rows : tuple of SX
+        Its ``d_min``, ``d_min_with``, ``t_collision``, ``collision_with`` before the step.
+    counts, running : SX
+        Whether the ship is present and the run still running (1/0).
+    t : SX
+        Time at the start of the step.
+    agents : list of (index, SX (2×1), SX)
+        Other ships and obstacles in agent order: index, position after the step, presence at its start.
+    half_beam : SX
+        Half the ship's beam: the distance at which its side touches a wall.
+    """
+    d_min, d_with, t_col, c_with = rows
+    dt = P["dt"]
     for j, pj, pres_j in agents:
-        dij = ca.norm_2(pos_n[i] - pj)
-        valid = ca.logic_and(ca.logic_and(counts_i, pres_j), running)
+        dij = ca.norm_2(pos - pj)
+        valid = ca.logic_and(ca.logic_and(counts, pres_j), running)
         closer = ca.logic_and(valid, dij < d_min)
         d_min = ca.if_else(closer, dij, d_min)
         d_with = ca.if_else(closer, j, d_with)
@@ -325,10 +362,10 @@ def _encounter_row(layout: Layout, c: dict, x_next: list, i: int):
         c_with = ca.if_else(hit, j, c_with)
     wall = hazards.KINDS["wall"]
     for k in range(layout.n_walls):  # touching a wall: the hull's side reaches it (no closest-approach row)
-        d = wall.distance(pos_n[i], P["walls"][:, k])
-        hit = ca.logic_and(ca.logic_and(ca.logic_and(counts_i, running), d < P["ships"][i]["half_beam"]), t_col < 0)
+        d = wall.distance(pos, P["walls"][:, k])
+        hit = ca.logic_and(ca.logic_and(ca.logic_and(counts, running), d < half_beam), t_col < 0)
         t_col = ca.if_else(hit, t + dt, t_col)
-        c_with = ca.if_else(hit, N + S + k, c_with)
+        c_with = ca.if_else(hit, layout.n_ships + layout.n_obstacles + k, c_with)
     return ca.vertcat(d_min, d_with, t_col, c_with)
 
 
