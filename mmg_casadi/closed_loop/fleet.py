@@ -45,8 +45,11 @@ V_MAX = float(np.hypot(ENVELOPE["speed"], ENVELOPE["speed"]))
 """Bound on a ship's speed through the water inside the model envelope (U): the candidate radius uses it."""
 
 
-def candidate_radius(r_safe: float, dt: float, chunk: int, current_speed: float = 0.0) -> float:
+def candidate_radius(r_safe: float, dt: float, chunk: int) -> float:
     """Radius (L) within which an agent at a chunk's start can come within ``r_safe`` of a ship during the chunk.
+
+    Two ships close at most at 2 :data:`V_MAX` (a uniform current carries both alike); a ship closes on a static
+    obstacle at most at V_MAX plus the current, which the table bounds by 1 U < V_MAX, so the same radius covers it.
 
     Parameters
     ----------
@@ -56,15 +59,12 @@ def candidate_radius(r_safe: float, dt: float, chunk: int, current_speed: float 
         Guidance step (L/U).
     chunk : int
         Steps of the chunk.
-    current_speed : float, default 0
-        Speed of a uniform current (U); it carries both ships alike, so it does not change their distance.
 
     Examples
     --------
     >>> round(candidate_radius(15.0, 0.25, 4), 3)
     23.485
     """
-    del current_speed  # a uniform current moves every ship alike
     return float(r_safe + 2.0 * V_MAX * dt * chunk)
 
 
