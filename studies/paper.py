@@ -139,6 +139,12 @@ def _pair(metrics, a="ship1", b="ship2"):
     raise KeyError((a, b))
 
 
+def _kept(encounters):
+    """Whether a ship kept every rule in all of its encounters with a risk of collision (``None`` without one)."""
+    judged = [e["compliant"] for e in encounters if e["applicable"] and e["compliant"] is not None]
+    return all(judged) if judged else None
+
+
 def _turn(pair, side) -> str:
     """Dominant turn of one side of a ship pair in its encounter window: starboard, port or none."""
     rules = pair.get("rules") or {}
@@ -343,11 +349,11 @@ def evaluate_claims(quick: dict, summary_rows: list, rows: list) -> list[dict]:
     mv_ok = []
     for case in ("overtaking", "head-on", "crossing"):
         p = _pair(_case(quick, cr, case, MV))
-        mv_ok.append({"case": case, "ship1": p["compliant"], "ship2": p["compliant_b"]})
+        mv_ok.append({"case": case, "ship1": _kept(p["encounters"]["a"]), "ship2": _kept(p["encounters"]["b"])})
     flags = [x is not False for d in mv_ok for x in (d["ship1"], d["ship2"])]
     c.append(_claim("C8", "Dynamic obstacle avoidance", "the modified sink-vortex follows COLREG rules 13, 14 and 15 "
-                    "(both ships of each encounter, rule-by-rule scorer, profile iitm-lab)", True, mv_ok, None,
-                    _all_some(flags)))
+                    "(both ships of each encounter; encounter scorer, risky encounters, profile colregs_profile)",
+                    True, mv_ok, None, _all_some(flags)))
     # ---------------------------------------------------------------- conflict
     cf = {m: _case(quick, "conflict", "three-ships", m) for m in (MV, IS, VO)}
 
@@ -365,7 +371,8 @@ def evaluate_claims(quick: dict, summary_rows: list, rows: list) -> list[dict]:
                    not str(p["b"]).startswith("obstacle"))
 
     def _compliant_all(m):
-        vals = [v for p in m["pairs"] for v in (p["compliant"], p["compliant_b"]) if v is not None]
+        vals = [_kept(p["encounters"][side]) for p in m["pairs"] if "encounters" in p for side in ("a", "b")]
+        vals = [v for v in vals if v is not None]
         return all(vals) if vals else None
 
     c.append(_claim("K2", "Conflicting responsibility", "velocity obstacle: collision free, min distance of ship 1 "

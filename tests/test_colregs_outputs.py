@@ -51,7 +51,7 @@ def test_head_on_on_a_collision_course_is_one_unlawful_encounter_per_ship(offset
     row = run_scenarios([_two_ships(offset)], time_guidance_calls=False)[0]
     assert (row["colregs_risky"], row["colregs_lawful"]) == (1, 0)
     assert row["colregs_score"] == pytest.approx(pair["encounters"]["a"][0]["score"], abs=0.05)
-    assert (row["colregs_compliant"], row["colregs_encounters"]) == (False, 1)  # legacy columns unchanged
+    assert row["colregs_compliant"] is False and row["colregs_verdicts"].startswith("1:head-on:")
 
 
 @pytest.mark.parametrize("offset, heading_b", [(60.0, 180.0), (8.0, 0.0)])

@@ -10,10 +10,9 @@ from scipy.stats import binomtest
 from mmg_casadi.cli import main
 from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.montecarlo.comparisons import COMPARISON_COLUMNS, compare_methods, read_csv
-from mmg_casadi.colregs.compliance import own_ship_compliance
 from mmg_casadi.scenarios.encounters import colregs_cases
 from mmg_casadi.errors import InputError
-from mmg_casadi.montecarlo.execution import run_scenarios
+from mmg_casadi.montecarlo.execution import own_ship_encounters, run_scenarios
 from mmg_casadi.montecarlo.study import run_study
 from mmg_casadi.montecarlo.results import RUN_COLUMNS, ResultsTable, summarize
 from mmg_casadi.scenarios.scenario import scenario_from_dict, with_method
@@ -44,28 +43,34 @@ def test_batch_history_is_the_single_rollout_decimated():
 
 
 def test_constructed_encounters_give_the_compliance_column():
-    # head-on, 4 L apart abeam, nobody alters course: Rule 14 (starboard alteration) is broken
+    # head-on, 2.5 L apart abeam (< d_risk = 4 L), nobody alters course: Rule 14 (starboard alteration) is broken
     # far apart (60 L abeam): no encounter, compliance undefined
     far = _head_on(60.0)
-    rows = run_scenarios([_head_on(4.0), far], time_guidance_calls=False)
-    assert (rows[0]["colregs_compliant"], rows[0]["colregs_encounters"]) == (False, 1)
-    assert (rows[1]["colregs_compliant"], rows[1]["colregs_encounters"]) == (None, 0)
+    rows = run_scenarios([_head_on(2.5), far], time_guidance_calls=False)
+    assert (rows[0]["colregs_compliant"], rows[0]["colregs_risky"]) == (False, 1)
+    assert (rows[1]["colregs_compliant"], rows[1]["colregs_risky"], rows[1]["colregs_verdicts"]) == (None, 0, "")
     assert rows[0]["success"] and rows[0]["failure_mechanism"] == ""
 
 
 @pytest.mark.parametrize("case", ["head-on", "crossing"])
 def test_compliance_agrees_with_the_single_run_assessment(case):
     sc = with_method(colregs_cases()[case], "modified-vortex")
-    single = run_scenario(sc).metrics["pairs"][0]
+    pair = run_scenario(sc).metrics["pairs"][0]
+    single = [e for e in pair["encounters"]["a"] if e["applicable"]]
     row = run_scenarios([sc], chunk=101, time_guidance_calls=False)[0]  # odd chunk: every step kept
-    assert row["colregs_encounters"] == 1 and row["colregs_compliant"] == single["compliant"]
+    assert row["colregs_risky"] == len(single) == 1
+    assert row["colregs_compliant"] == single[0]["compliant"]
+    assert row["colregs_verdicts"].split(":")[1] == single[0]["role"]
 
 
 def test_compliance_needs_both_ships_sailing():
     t = np.linspace(0.0, 40.0, 161)
     own = np.column_stack([t, 0 * t, 0 * t, 0 * t])
     other = np.column_stack([50.0 - t, 2.0 + 0 * t, np.pi + 0 * t, np.where(t > 10, 1, 0)])  # stops at t = 10
-    assert own_ship_compliance(t, np.stack([own, other], axis=1), r_safe=15.0, collision_distance=2.0) == (None, 0)
+    stopped = own_ship_encounters(t, np.stack([own, other], axis=1))
+    assert (stopped["colregs_risky"], stopped["colregs_compliant"], stopped["colregs_verdicts"]) == (0, None, "")
+    other[:, 3] = 0  # the same ship sailing on: a risky head-on
+    assert own_ship_encounters(t, np.stack([own, other], axis=1))["colregs_risky"] == 1
 
 
 def test_compare_methods_is_the_exact_mcnemar_test_on_paired_runs():

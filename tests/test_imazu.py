@@ -104,3 +104,15 @@ def test_study_imazu_cli_refuses_bad_targets_and_foreign_options(tmp_path, capsy
     assert "--targets" in capsys.readouterr().err and not (tmp_path / "a").exists()
     assert main(["study", "imazu", "--runs", "5", "--out", str(tmp_path / "b")]) == 2
     assert "--runs" in capsys.readouterr().err
+
+
+def test_every_target_on_a_collision_course_yields_a_scored_encounter():
+    # own ship and targets hold course and speed: every target meets the own ship at the same point, so every
+    # (own ship, target) pair has a risk of collision and a scored encounter; the single-target cases' roles are
+    # Imazu's: 1 head-on, 2 crossing from starboard, 3 overtaking the slower ship ahead, 4 crossing from port
+    rows = run_imazu("none", "hold")
+    for r in rows:
+        others = sorted({e["other"] for e in r["encounters"]})
+        assert others == [f"target{i}" for i in range(1, N_TARGETS[r["case"]] + 1)], (r["case"], others)
+    roles = {r["case"]: [e["role"] for e in r["encounters"]] for r in rows if r["case"] <= 4}
+    assert roles == {1: ["head-on"], 2: ["give-way"], 3: ["overtaking"], 4: ["stand-on"]}

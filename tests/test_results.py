@@ -31,10 +31,11 @@ def _row(env: int, method: str, run: int, success: bool = True, **extra) -> dict
         "guidance_call_us": 4.0 + run / 17, "n_ships": 3, "n_obstacles": 1,
         "current_speed": 0.1 * run / 23, "current_direction_deg": -170.0 + run, "wind_speed": 15.0 * run / 29,
         "wind_direction_deg": 33.5 - run,
-        "failure_mechanism": "" if success else "obstacle", "colregs_compliant": None if run % 3 == 0 else run % 2 == 0,
-        "colregs_encounters": 0 if run % 3 == 0 else 1 + run % 2,
+        "failure_mechanism": "" if success else "obstacle",
         "colregs_risky": run % 3, "colregs_lawful": run % 3 // 2,
         "colregs_score": math.nan if run % 3 == 0 else 0.5 + run / 97,
+        "colregs_compliant": None if run % 3 == 0 else run % 3 == run % 3 // 2,
+        "colregs_verdicts": ";".join(f"{j + 1}:give-way:0.5:8={int(j < run % 3 // 2)}" for j in range(run % 3)),
     }
     row.update(extra)
     return row
@@ -258,9 +259,10 @@ def test_summary_per_encounter_colregs_rate_and_score():
 
 def test_table_of_the_previous_version_is_refused(tmp_path):
     path = tmp_path / "runs.csv"
-    path.write_text(",".join(RUN_COLUMNS[:-3]) + "\n")
-    with pytest.raises(InputError, match="older version, without the columns colregs_risky, colregs_lawful, "
-                                         "colregs_score"):
+    version_3 = (*RUN_COLUMNS[:RUN_COLUMNS.index("colregs_risky")], "colregs_compliant", "colregs_encounters",
+                 "colregs_risky", "colregs_lawful", "colregs_score")
+    path.write_text(",".join(version_3) + "\n")
+    with pytest.raises(InputError, match="older version, without the columns colregs_verdicts;"):
         ResultsTable(path).read()
 
 

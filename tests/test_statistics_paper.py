@@ -34,7 +34,7 @@ NOT_REPRODUCED = {
     "C8": "partly: the stand-on ships of overtaking and crossing alter course (Rule 17(a)(i))",
     "K1": "partly: with the inverse square ship 2 collides as well",
     "K2": "partly: VO min distance 2.93 L (paper 4 L)",
-    "K3": "partly: modified vortex collision free at 5.67 L but not COLREG-compliant under the rule-by-rule scorer",
+    "K3": "partly: modified vortex collision free at 5.67 L but not COLREG-compliant under the encounter scorer",
     "N1": "partly: narrow channel min distance 6.12 L (paper a little over 2 L)",
     "T3": "partly: modified vortex 99.44 % (env 1) but 98.76 % in env 2",
     "T4": "partly: env 5 success 96.0 % [95.4, 96.5] (paper 97 %)",

@@ -285,12 +285,33 @@ RUN_COLUMN_DOCS = {
     "wind_speed": ("float, m/s", "sampled true wind speed (0 without `--wind`)"),
     "wind_direction_deg": ("float, deg", "direction the wind comes from"),
     "failure_mechanism": ("str", "`\"\"` on success, else one of the failure mechanisms below"),
-    "colregs_compliant": ("bool", "legacy scorer: the own ship complied in all of its classified encounters "
-                          "(empty without one)"),
-    "colregs_encounters": ("int", "legacy scorer: the own ship's classified encounters"),
     "colregs_risky": ("int", "encounter scorer: the own ship's encounters with a risk of collision"),
     "colregs_lawful": ("int", "encounter scorer: of those, the ones it was compliant in"),
     "colregs_score": ("float", "encounter scorer: mean graded score of those encounters (0–1)"),
+    "colregs_compliant": ("bool", "encounter scorer: every risky encounter kept (empty without one; secondary)"),
+    "colregs_verdicts": ("str", "encounter scorer: each risky encounter as `other:role:score:rule=0|1/...`, "
+                         "encounters separated by `;` (`mmg_casadi.montecarlo.encounter_summary`)"),
+}
+
+ENCOUNTER_DOCS = {
+    "environment": "environment", "method": "method",
+    "group": "`all`, a role (`head-on`, `give-way`, `stand-on`, `overtaking`, `overtaken`) or a rule "
+             "(`rule 8` … `rule 17c`)",
+    "n": "risky encounters of the group (for a rule: those in which it applies)",
+    "kept": "of those, the ones kept (every applicable rule; for a rule: that rule)",
+    "rate": "`kept / n`", "ci_low": "Wilson 95 % interval, low", "ci_high": "Wilson 95 % interval, high",
+    "score_mean": "mean graded score of the group's encounters (0–1)",
+}
+
+PAIR_DOCS = {
+    "environment": "environment", "method_a": "method A", "method_b": "method B",
+    "pairs": "encounters both methods had: same run, same other ship, same occurrence",
+    "rate_a": "A's compliance over the pairs", "rate_b": "B's compliance over the pairs",
+    "both": "pairs both kept", "a_only": "pairs only A kept", "b_only": "pairs only B kept",
+    "neither": "pairs neither kept", "difference": "`rate_a - rate_b`",
+    "ci_low": "Newcombe 95 % interval of the difference, low", "ci_high": "Newcombe 95 % interval, high",
+    "p_value": "exact McNemar test on the discordant pairs",
+    "unpaired_a": "encounters only A had (B never came into risk with that ship)", "unpaired_b": "the same for B",
 }
 
 OUTCOME_DOCS = {
@@ -332,7 +353,7 @@ def _summary_doc(column: str):
         "environment": "environment", "method": "method", "runs": "runs in the cell",
         "success_rate": "fraction of runs with `success`", "success_ci_low": "Wilson 95 % interval, low",
         "success_ci_high": "Wilson 95 % interval, high",
-        "compliance_runs": "runs with a classified encounter (legacy scorer)",
+        "compliance_runs": "runs with a risky encounter",
         "compliance_rate": "fraction of those with `colregs_compliant`",
         "compliance_ci_low": "Wilson 95 % interval, low", "compliance_ci_high": "Wilson 95 % interval, high",
         "colregs_risky": "sum of `colregs_risky` over the runs", "colregs_lawful": "sum of `colregs_lawful`",
@@ -440,6 +461,15 @@ def write_formats() -> None:
     _check_keys("summary.csv columns", {c for c, d in docs.items() if d}, SUMMARY_COLUMNS)
     out = _table(("column", "meaning"), ((f"`{c}`", docs[c] or "") for c in SUMMARY_COLUMNS))
     _write(GENERATED / "formats_summary.md", "\n".join(out))
+
+    from mmg_casadi.montecarlo.encounter_summary import ENCOUNTER_COLUMNS, PAIR_COLUMNS
+    for name, documented, columns in (("colregs.csv", ENCOUNTER_DOCS, ENCOUNTER_COLUMNS),
+                                      ("colregs_comparisons.csv", PAIR_DOCS, PAIR_COLUMNS)):
+        _check_keys(f"{name} columns", documented, columns)
+    out = _table(("column", "meaning"), ((f"`{c}`", ENCOUNTER_DOCS[c]) for c in ENCOUNTER_COLUMNS))
+    out += ["", "`colregs_comparisons.csv`:", ""]
+    out += _table(("column", "meaning"), ((f"`{c}`", PAIR_DOCS[c]) for c in PAIR_COLUMNS))
+    _write(GENERATED / "formats_colregs.md", "\n".join(out))
 
     _check_keys("ship outcomes", OUTCOME_DOCS, OUTCOMES)
     _check_keys("run failures", RUN_FAILURE_DOCS, RUN_FAILURES)

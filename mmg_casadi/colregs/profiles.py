@@ -38,6 +38,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -299,10 +300,14 @@ def scoring_profile(profile=None) -> ScoringProfile:
     ...
     mmg_casadi.errors.InputError: profile: expected one of: iitm-lab, ntnu-2023, got 'strict'
     """
-    if profile is None:
-        return iitm_lab()
     if isinstance(profile, ScoringProfile):
         return profile
-    if profile not in SCORING_PROFILES:
+    if profile is not None and profile not in SCORING_PROFILES:
         raise InputError("profile", f"one of: {', '.join(SCORING_PROFILES)}", profile)
-    return SCORING_PROFILES[profile]()
+    return _named("iitm-lab" if profile is None else profile)
+
+
+@functools.lru_cache(maxsize=None)
+def _named(name: str) -> ScoringProfile:
+    """The profile of a name, built (and checked) once per process; profiles are frozen."""
+    return SCORING_PROFILES[name]()

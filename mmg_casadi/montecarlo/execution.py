@@ -27,16 +27,14 @@ Outcome of a run (own ship = agent 0, judged from the final state):
 ``failure_mechanism``
     why a failed run failed, one of :data:`mmg_casadi.montecarlo.failures.MECHANISMS` (``""`` on success): started too
     close, obstacle near the goal, near-goal, ship–ship, obstacle, stalled, timeout, diverged (see there).
-``colregs_compliant``, ``colregs_encounters``
-    whether the own ship kept the COLREGs (profile ``iitm-lab``) in all of its classified encounters with other
-    ships, and how many there were (:func:`mmg_casadi.colregs.compliance.own_ship_compliance`, empty without one); judged
-    on a history of positions and headings kept every :data:`HISTORY_EVERY` guidance steps by
-    :func:`~mmg_casadi.closed_loop.simulation.simulate_batch_history` (the legacy scorer).
-``colregs_risky``, ``colregs_lawful``, ``colregs_score``
+``colregs_risky``, ``colregs_lawful``, ``colregs_score``, ``colregs_compliant``, ``colregs_verdicts``
     the encounter scorer's view (:func:`mmg_casadi.colregs.scorer.score_encounters` with ``own = 0``, profile the
-    parameter ``colregs_profile``) on the same history: how many encounters with a risk of collision the own ship
-    had with other ships (Rule 7 gate; those with at least one applicable rule), how many of them it kept every
-    applicable rule in, and the mean of their graded scores (``nan`` without one); see :func:`own_ship_encounters`.
+    parameter ``colregs_profile``) on a history of positions and headings kept every :data:`HISTORY_EVERY` guidance
+    steps by :func:`~mmg_casadi.closed_loop.simulation.simulate_batch_history`: how many encounters with a risk of
+    collision the own ship had with other ships (Rule 7 gate; those with at least one applicable rule), how many of
+    them it kept every applicable rule in, the mean of their graded scores (``nan`` without one), the run-level
+    flag (every risky encounter kept; empty without one) and each encounter's role, score and rule verdicts
+    (:func:`format_verdicts`); see :func:`own_ship_encounters`.
 
 Outcome, CE and MCTE are judged by :meth:`mmg_casadi.closed_loop.problem.ClosedLoopModel.outcomes`, as for a single
 scenario run (a diverged ship's CE/MCTE are ``nan``; summaries average them over successful runs only). Fleet
@@ -64,9 +62,12 @@ from mmg_casadi.closed_loop.simulation import (
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.closed_loop.problem import ClosedLoopModel, build_problem
-from mmg_casadi.colregs.compliance import own_ship_compliance
 from mmg_casadi.colregs.profiles import scoring_profile
+from mmg_casadi.colregs.kinematics import ground_velocity
+from mmg_casadi.colregs.risk import risk_of_collision
+from mmg_casadi.colregs.score import cpa_tcpa
 from mmg_casadi.colregs.scorer import score_encounters
+from mmg_casadi.montecarlo.encounter_summary import format_verdicts
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
 from mmg_casadi.montecarlo.failures import failure_mechanism, turn_time_90, unavoidable_at_start
 from mmg_casadi.montecarlo.results import RUN_COLUMNS
@@ -203,11 +204,13 @@ HISTORY_EVERY = 2
 
 
 def own_ship_encounters(t, states, profile=None) -> dict:
-    """``colregs_risky``, ``colregs_lawful`` and ``colregs_score`` of one run: the own ship's (ship 0) encounters
-    with a risk of collision, judged by :func:`~mmg_casadi.colregs.scorer.score_encounters`.
+    """``colregs_risky``, ``colregs_lawful``, ``colregs_score``, ``colregs_compliant`` and ``colregs_verdicts`` of
+    one run: the own ship's (ship 0) encounters with a risk of collision, judged by
+    :func:`~mmg_casadi.colregs.scorer.score_encounters`.
 
-    Only the ships that come within the profile's risk range ``r_risk`` of the own ship while both sail are
-    scored (a ship farther away has no risk of collision and no duty; the verdicts are the same).
+    Only the ships with a risk of collision with the own ship at some sample
+    (:func:`~mmg_casadi.colregs.risk.risk_of_collision`, evaluated for all ships at once) are scored: a ship
+    without one has no encounter and no duty, so the verdicts are those of scoring every ship.
 
     Parameters
     ----------
@@ -222,7 +225,9 @@ def own_ship_encounters(t, states, profile=None) -> dict:
     Returns
     -------
     dict
-        ``colregs_risky`` (int), ``colregs_lawful`` (int) and ``colregs_score`` (float, ``nan`` if no risky one).
+        ``colregs_risky`` (int), ``colregs_lawful`` (int), ``colregs_score`` (float, ``nan`` if no risky one),
+        ``colregs_compliant`` (every risky encounter kept; ``None`` without one) and ``colregs_verdicts`` (str,
+        :func:`~mmg_casadi.montecarlo.encounter_summary.format_verdicts` with the ships' scenario indices).
 
     Examples
     --------
@@ -232,27 +237,35 @@ def own_ship_encounters(t, states, profile=None) -> dict:
     >>> own = np.column_stack([t, 0 * t, 0 * t, 0 * t])
     >>> other = np.column_stack([50.0 - t, 2.0 + 0 * t, np.pi + 0 * t, 0 * t])
     >>> r = own_ship_encounters(t, np.stack([own, other], axis=1))
-    >>> r["colregs_risky"], r["colregs_lawful"], r["colregs_score"] < 0.5
-    (1, 0, True)
+    >>> r["colregs_risky"], r["colregs_lawful"], r["colregs_score"] < 0.5, r["colregs_compliant"]
+    (1, 0, True, False)
+    >>> r["colregs_verdicts"].split(":")[:2]
+    ['1', 'head-on']
     """
     profile = scoring_profile(profile)
     t = np.asarray(t, float)
     states = np.asarray(states, float)
     mask = sailing_mask(states[:, :, 3])
-    dist = np.linalg.norm(states[:, 1:, :2] - states[:, :1, :2], axis=2)
-    near = np.any((dist <= profile.r_risk) & mask[:, :1] & mask[:, 1:], axis=0)
-    ships = [0, *(1 + np.flatnonzero(near))]
-    risky = []
-    if len(ships) > 1 and t.size > 1:  # one sample has no velocity, hence no risk of collision
+    ships, risky = [0], []
+    if states.shape[1] > 1 and t.size > 1:  # one sample has no velocity, hence no risk of collision
+        pos = states[:, :, :2]
+        vel = ground_velocity(t, pos)
+        d = pos[:, 1:] - pos[:, :1]
+        cpa, tcpa = cpa_tcpa(d, vel[:, 1:] - vel[:, :1])
+        gate = risk_of_collision(cpa, tcpa, np.hypot(d[..., 0], d[..., 1]), mask[:, :1] & mask[:, 1:], profile)
+        ships += [int(j) for j in 1 + np.flatnonzero(gate.any(axis=0))]
+    if len(ships) > 1:
         risky = [e for e in score_encounters(t, states[:, ships, :2], states[:, ships, 2], active=mask[:, ships],
                                              profile=profile, own=0) if e.applicable and e.compliant is not None]
-    return {"colregs_risky": len(risky), "colregs_lawful": sum(1 for e in risky if e.compliant),
-            "colregs_score": float(np.mean([e.score for e in risky])) if risky else math.nan}
+    lawful = sum(1 for e in risky if e.compliant)
+    return {"colregs_risky": len(risky), "colregs_lawful": lawful,
+            "colregs_score": float(np.mean([e.score for e in risky])) if risky else math.nan,
+            "colregs_compliant": lawful == len(risky) if risky else None,
+            "colregs_verdicts": format_verdicts(risky, ships)}
 
 
 def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
-    """``failure_mechanism``, ``colregs_compliant``, ``colregs_encounters`` (legacy scorer) and
-    ``colregs_risky``, ``colregs_lawful``, ``colregs_score`` (:func:`own_ship_encounters`) of one run.
+    """``failure_mechanism`` and the COLREG columns (:func:`own_ship_encounters`) of one run.
 
     Parameters
     ----------
@@ -289,10 +302,7 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
                              collision_with=own["collision_with"], goals=goals, obstacles=obstacles,
                              positions_at_collision=at, turn_time=turn_time_90(float(P["delta_max_deg"])),
                              near_goal_distance=float(P["near_goal_distance"]), unavoidable=unavoidable)
-    compliant, n = own_ship_compliance(t, states, r_safe=float(P["r_safe"]),
-                                       collision_distance=float(P["collision_distance"]))
-    return {"failure_mechanism": mech, "colregs_compliant": compliant, "colregs_encounters": n,
-            **own_ship_encounters(t, states, P["colregs_profile"])}
+    return {"failure_mechanism": mech, **own_ship_encounters(t, states, P["colregs_profile"])}
 
 
 def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT_CHUNK,

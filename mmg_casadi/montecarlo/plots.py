@@ -24,7 +24,7 @@ PANELS: tuple[tuple[str, str, str, float], ...] = (
     ("time_to_goal", "Time to reach the goal", "Time to goal [L/U]", 1.0),
     ("ce", "Control effort (CE)", "CE [-]", 1.0),
     ("mcte", "Mean cross-track error (MCTE)", "MCTE [L]", 1.0),
-    ("compliance", "Own ship COLREG-compliant (runs with an encounter)", "Compliant [%]", 100.0),
+    ("colregs_encounter", "Own ship COLREG encounters kept (risky encounters)", "Kept [%]", 100.0),
 )
 """(metric, title, y label, scale) of each panel; the success rate is shown in percent."""
 
@@ -32,7 +32,7 @@ _MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 
 
 def _columns(metric: str) -> tuple[str, str, str]:
-    if metric in ("success", "compliance"):
+    if metric in ("success", "colregs_encounter"):
         return f"{metric}_rate", f"{metric}_ci_low", f"{metric}_ci_high"
     return f"{metric}_mean", f"{metric}_ci_low", f"{metric}_ci_high"
 

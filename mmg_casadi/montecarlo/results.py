@@ -4,7 +4,7 @@ One CSV row per (environment, method, run) with the columns :data:`RUN_COLUMNS`.
 appends rows durably (flush + fsync per append), skips rows already stored, and tolerates a truncated last
 line left by a killed process. :func:`summarize` reduces the rows to one line per (environment, method)
 with the paper's statistics: success rate with a Wilson score interval and means of time to goal, CE,
-MCTE and guidance-call time with normal-approximation 95 % confidence intervals, the legacy run-level COLREG
+MCTE and guidance-call time with normal-approximation 95 % confidence intervals, the run-level COLREG
 compliance and the encounter scorer's per-encounter compliance (Wilson interval) and mean graded score.
 """
 
@@ -29,15 +29,19 @@ RUN_COLUMNS: tuple[str, ...] = (
     "failure_time", "time_to_goal", "ce", "mcte", "fleet_time_to_goal", "fleet_ce", "fleet_mcte",
     "min_distance", "guidance_call_us", "n_ships", "n_obstacles",
     "current_speed", "current_direction_deg", "wind_speed", "wind_direction_deg",
-    "failure_mechanism", "colregs_compliant", "colregs_encounters",
-    "colregs_risky", "colregs_lawful", "colregs_score",
+    "failure_mechanism", "colregs_risky", "colregs_lawful", "colregs_score", "colregs_compliant",
+    "colregs_verdicts",
 )
 """Columns of the results CSV, in order (version :data:`RESULTS_VERSION`)."""
 
-RESULTS_VERSION = 3
+RESULTS_VERSION = 4
 """Version of :data:`RUN_COLUMNS`: 2 added ``failure_mechanism``, ``colregs_compliant`` and
 ``colregs_encounters`` (the legacy scorer); 3 added the encounter scorer's ``colregs_risky``, ``colregs_lawful``
-and ``colregs_score``; a table of another version is refused, never misread."""
+and ``colregs_score``; 4 dropped the legacy scorer (``colregs_encounters``; ``colregs_compliant`` is now the
+encounter scorer's run-level flag) and added ``colregs_verdicts``
+(:mod:`mmg_casadi.montecarlo.encounter_summary`); a table of another version is refused, never misread."""
+
+_RETIRED_COLUMNS = frozenset({"colregs_encounters"})  # columns of older versions, no longer written
 
 MECHANISMS: tuple[str, ...] = failure_mechanisms.MECHANISMS
 """Allowed non-empty values of ``failure_mechanism`` (:data:`mmg_casadi.montecarlo.failures.MECHANISMS`)."""
@@ -48,10 +52,10 @@ KEY_COLUMNS: tuple[str, str, str] = ("environment", "method", "run")
 FAILURES: tuple[str, ...] = ("", *RUN_FAILURES)
 """Allowed values of the ``failure`` column (``""`` for a successful run)."""
 
-_INT_COLUMNS = frozenset({"environment", "run", "seed", "n_ships", "n_obstacles", "colregs_encounters",
-                          "colregs_risky", "colregs_lawful"})
+_INT_COLUMNS = frozenset({"environment", "run", "seed", "n_ships", "n_obstacles", "colregs_risky",
+                          "colregs_lawful"})
 _BOOL_COLUMNS = frozenset({"success", "fleet_success", "colregs_compliant"})
-_STR_COLUMNS = frozenset({"method", "failure", "failure_pair", "failure_mechanism"})
+_STR_COLUMNS = frozenset({"method", "failure", "failure_pair", "failure_mechanism", "colregs_verdicts"})
 _FLOAT_COLUMNS = frozenset(RUN_COLUMNS) - _INT_COLUMNS - _BOOL_COLUMNS - _STR_COLUMNS
 
 METRICS: tuple[str, ...] = ("time_to_goal", "ce", "mcte", "guidance_call_us")
@@ -175,7 +179,7 @@ class ResultsTable:
         header = next(reader)
         if tuple(header) != RUN_COLUMNS:
             missing = [c for c in RUN_COLUMNS if c not in header]
-            if missing and all(c in RUN_COLUMNS for c in header):
+            if missing and all(c in RUN_COLUMNS or c in _RETIRED_COLUMNS for c in header):
                 raise InputError(str(self.path), f"a results table of version {RESULTS_VERSION} (this one is from an "
                                  f"older version, without the columns {', '.join(missing)}; use a new output "
                                  "directory or rerun the study there)", ",".join(header))
@@ -480,8 +484,8 @@ def summarize(rows) -> Summary:
     runs (finite values); each with the normal-approximation interval ``mean ± 1.96 * s / sqrt(n)``
     (``s`` the sample standard deviation, ``n`` the number of values; ``nan`` when ``n < 2``).
 
-    COLREGs: ``compliance_*`` is the legacy run-level rate (runs with ``colregs_compliant`` true among those with a
-    verdict, Wilson interval). ``colregs_encounter_rate`` is the encounter scorer's per-encounter rate,
+    COLREGs: ``compliance_*`` is the run-level rate (runs with ``colregs_compliant`` true, i.e. every risky
+    encounter kept, among the runs with a risky encounter, Wilson interval; secondary to the per-encounter rate). ``colregs_encounter_rate`` is the encounter scorer's per-encounter rate,
     ``sum(colregs_lawful) / sum(colregs_risky)`` over the runs, with a Wilson interval (``nan`` without a risky
     encounter), and ``colregs_score_mean`` the mean graded score over those encounters (each run's
     ``colregs_score`` weighted by its ``colregs_risky``).

@@ -52,6 +52,7 @@ from mmg_casadi.io import write_json
 from mmg_casadi.limits import check_runs
 from mmg_casadi.montecarlo.batching import (BACKENDS, DEFAULT_BATCH, LocalExecutor, RayExecutor, _check_workers,
                                             plan_batches, prepare_layouts)
+from mmg_casadi.montecarlo import encounter_summary
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges
 from mmg_casadi.montecarlo.execution import (DEFAULT_CHUNK, _non_default, _run_disturbances, layout_for,
                                              sampled_scenario)
@@ -231,10 +232,16 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
     from mmg_casadi.montecarlo.comparisons import compare_methods, to_markdown, write_csv  # scipy.stats: ~1 s
     comparisons = compare_methods(rows, methods)
     write_csv(comparisons, out / "comparisons.csv")
+    by_encounter = encounter_summary.summarize_encounters(rows)
+    encounter_pairs = encounter_summary.compare_encounters(rows, methods)
+    encounter_summary.write_csv(by_encounter, out / "colregs.csv", encounter_summary.ENCOUNTER_COLUMNS)
+    encounter_summary.write_csv(encounter_pairs, out / "colregs_comparisons.csv", encounter_summary.PAIR_COLUMNS)
     (out / "summary.md").write_text(
         summary.to_markdown() + "\n\n## Failure mechanisms (own ship; mmg_casadi.montecarlo.failures)\n\n"
         + summary.failures_markdown() + "\n\n## Paired comparisons (same runs; exact McNemar test)\n\n"
-        + to_markdown(comparisons) + "\n", encoding="utf-8")
+        + to_markdown(comparisons) + "\n\n## COLREG encounters with a risk of collision (own ship; profile "
+        + f"{params['colregs_profile']}; mmg_casadi.montecarlo.encounter_summary)\n\n"
+        + encounter_summary.to_markdown(by_encounter, encounter_pairs) + "\n", encoding="utf-8")
     from mmg_casadi.montecarlo.plots import plot_statistics  # matplotlib: imported only when a study is written
     plot_statistics(summary, out / "statistics.png")
     failures = write_failures(rows, out / "failures", params=params)
@@ -244,6 +251,7 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
               **ranges.to_dict()}
     write_json(out / "metrics.json", {
         "config": config, "params": params, "summary": summary.rows, "comparisons": comparisons,
+        "colregs": {"by_encounter": by_encounter, "comparisons": encounter_pairs},
         "runs_total": len(rows),
         "runs_new": new_runs, "elapsed_s": elapsed, "failure_files": [str(p.relative_to(out)) for p in failures]})
     return summary

@@ -116,8 +116,9 @@ def run_imazu(method: str, targets: str = "hold", *, cases=tuple(CASES), params:
     """Simulate Imazu problems and assess the own ship.
 
     Returns one dict per case: ``case``, ``safe`` (own ship reached its goal and never came within the collision
-    distance of any ship), ``reached_goal``, ``min_distance`` (L, own ship to its nearest target), ``collided``
-    and ``result`` (the :class:`~mmg_casadi.scenarios.run.ScenarioResult`).
+    distance of any ship), ``reached_goal``, ``min_distance`` (L, own ship to its nearest target), ``collided``,
+    ``encounters`` (the own ship's encounters with a risk of collision, :func:`own_encounters`) and ``result``
+    (the :class:`~mmg_casadi.scenarios.run.ScenarioResult`).
 
     Parameters
     ----------
@@ -141,6 +142,8 @@ def run_imazu(method: str, targets: str = "hold", *, cases=tuple(CASES), params:
     >>> rows = run_imazu("modified-vortex", "hold", cases=(2,))
     >>> rows[0]["case"], rows[0]["safe"], rows[0]["min_distance"] > 2.0
     (2, True, True)
+    >>> [(e["other"], e["role"]) for e in rows[0]["encounters"]]
+    [('target1', 'give-way')]
     """
     out = []
     for k in cases:
@@ -151,7 +154,26 @@ def run_imazu(method: str, targets: str = "hold", *, cases=tuple(CASES), params:
         collided = own["collided"]  # the closed loop's judgement, as every runner's
         out.append({"case": int(k), "safe": bool(own["reached_goal"] and not collided),
                     "reached_goal": bool(own["reached_goal"]), "min_distance": dmin, "collided": bool(collided),
-                    "result": res})
+                    "encounters": own_encounters(res), "result": res})
+    return out
+
+
+def own_encounters(result) -> list[dict]:
+    """The own ship's (first ship's) encounters with a risk of collision in a scenario result, as judged by the
+    encounter scorer (:func:`mmg_casadi.colregs.scorer.score_encounters`; ``Encounter.to_dict()`` of the pairs in
+    ``metrics.json``), in the order of the other ships.
+
+    Parameters
+    ----------
+    result : ScenarioResult
+        Result of :func:`~mmg_casadi.scenarios.run.run_scenario`.
+    """
+    own = result.metrics["ships"][0]["name"]
+    out = []
+    for pair in result.metrics["pairs"]:
+        side = "a" if pair["a"] == own else "b" if pair["b"] == own else None
+        if side is not None:
+            out += [e for e in pair["encounters"][side] if e["applicable"] and e["compliant"] is not None]
     return out
 
 
