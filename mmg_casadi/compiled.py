@@ -4,14 +4,27 @@ A Function is code-generated to C, the source hashed (SHA-256 of the C text and 
 compiled with the system C compiler to ``<cache>/<name>_<hash>.so``; later calls (in this or any other process,
 e.g. a worker of the Monte Carlo pool) load that library with ``casadi.external`` instead of recompiling.
 The cache directory is ``$MMG_CASADI_CACHE`` or ``~/.cache/mmg-casadi``.
+
+The compiler never outlives the process that started it: it runs under a small watchdog process
+(``mmg_casadi/_watchdog.py``, mode ``build``) in a process group of its own, and the watchdog kills that group
+(``gcc`` with its ``cc1``, ``as``, ``ld``) when the compiling process is interrupted (Ctrl-C, SIGTERM, SIGHUP) or
+dies, also by SIGKILL. The build happens in a folder ``<cache>/.build-<pid>-<random>@<host>`` that the watchdog
+removes in every case (a folder left by a process that is gone, e.g. after a power cut, is removed by the next
+compile on that host); the library is flushed to disk and renamed into place atomically, and a cached library is
+checked to be complete (:func:`library_is_complete`) before it is loaded, else rebuilt.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import secrets
 import shutil
+import signal
+import socket
+import struct
 import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -20,6 +33,12 @@ import casadi as ca
 DEFAULT_FLAGS = ("-O2", "-fno-math-errno", "-fPIC", "-shared")
 """C compiler flags. ``-fno-math-errno`` lets ``sqrt`` compile to one instruction (errno is never read; the
 values are the same); no ``-ffast-math`` / ``-march=native``, which change results in the last bits."""
+BUILD_PREFIX = ".build-"
+"""Name prefix of the temporary build folders in the cache (``.build-<pid>-<random>@<host>``)."""
+WATCHDOG = Path(__file__).with_name("_watchdog.py")
+"""The watchdog script the compiler runs under."""
+STOP_TIMEOUT = 10.0
+"""Seconds to wait for the watchdog to stop the compiler and remove the build folder after an interruption."""
 
 
 def cache_dir() -> Path:
@@ -77,8 +96,9 @@ def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
     With ``also``, one library holds ``f`` and those Functions (their shared code compiled once) and the
     compiled equivalents of all of them are returned, in order, as a list.
 
-    The library is written to a temporary file and moved into place atomically, so concurrent processes that
-    compile the same Function never load a half-written file.
+    The library is built in a temporary folder by a compiler that dies with this process (module notes) and moved
+    into place atomically, so concurrent processes that compile the same Function never load a half-written file;
+    a cached library that is not complete (:func:`library_is_complete`) is rebuilt.
 
     Parameters
     ----------
@@ -97,16 +117,106 @@ def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
     10.0
     """
     so, src = library_path(f, flags, also)
+    if so.exists() and not library_is_complete(so):
+        so.unlink(missing_ok=True)  # e.g. cut short by a crash of an older version: loading it could crash
     if not so.exists():
-        with tempfile.TemporaryDirectory(dir=so.parent) as tmp:
-            c_file = Path(tmp, f"{f.name()}.c")
-            c_file.write_text(src)
-            out = Path(tmp, so.name)
-            res = subprocess.run([_compiler(), *flags, str(c_file), "-o", str(out), "-lm"],
-                                 capture_output=True, text=True)
-            if res.returncode != 0:
-                raise RuntimeError(f"compiling {f.name()} failed:\n{res.stderr[-2000:]}")
-            os.replace(out, so)
+        _build(f.name(), src, so, flags)
     if also:
         return [ca.external(g.name(), str(so)) for g in (f, *also)]
     return ca.external(f.name(), str(so))
+
+
+def _build(name: str, src: str, so: Path, flags) -> None:
+    """Compile ``src`` to ``so`` under the watchdog (module notes); on an interruption stop it, then re-raise."""
+    _remove_stale_builds(so.parent)
+    build = so.parent / f"{BUILD_PREFIX}{os.getpid()}-{secrets.token_hex(4)}@{socket.gethostname()}"
+    c_file, out = f"{name}.c", so.name
+    cmd = [sys.executable, "-I", "-S", str(WATCHDOG), "build", str(os.getpid()), str(build), c_file, out, str(so),
+           "--", _compiler(), *flags, str(build / c_file), "-o", str(build / out), "-lm"]
+    guard = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        _out, err = guard.communicate(src.encode())
+    except BaseException:  # Ctrl-C, SIGTERM (raised by signals.terminate_as_interrupt), ...
+        guard.send_signal(signal.SIGTERM)
+        try:
+            guard.wait(STOP_TIMEOUT)
+        except subprocess.TimeoutExpired:
+            guard.kill()
+            guard.wait()
+            shutil.rmtree(build, ignore_errors=True)
+        raise
+    if guard.returncode != 0:
+        raise RuntimeError(f"compiling {name} failed:\n{err.decode(errors='replace')[-2000:]}")
+
+
+def _remove_stale_builds(directory: Path) -> None:
+    """Remove the build folders in ``directory`` of processes of this host that are gone."""
+    host = socket.gethostname()
+    for d in directory.glob(BUILD_PREFIX + "*"):
+        head, _, owner_host = d.name[len(BUILD_PREFIX):].partition("@")
+        pid = head.split("-")[0]
+        if owner_host == host and pid.isdigit() and not _alive(int(pid)):
+            shutil.rmtree(d, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def library_is_complete(path) -> bool:
+    """Whether the shared library at ``path`` is whole: for an ELF file (Linux), every segment and the section
+    header table lie within the file; elsewhere, the file is not empty.
+
+    ``dlopen`` of a library cut short (e.g. by a crash while it was written) can crash the process instead of
+    failing, so :func:`compile_function` checks a cached library with this before loading it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The library file.
+
+    Returns
+    -------
+    bool
+        False for a missing, empty or truncated file (or an ELF header that does not parse).
+
+    Examples
+    --------
+    >>> x = ca.SX.sym("x")
+    >>> so, _ = library_path(ca.Function("square_plus_one", [x], [x**2 + 1]))
+    >>> _ = compile_function(ca.Function("square_plus_one", [x], [x**2 + 1]))
+    >>> library_is_complete(so), library_is_complete(so.with_suffix(".missing"))
+    (True, False)
+    """
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(64)
+            size = os.fstat(fh.fileno()).st_size
+            if head[:4] != b"\x7fELF":
+                return size > 0 and not sys.platform.startswith("linux")
+            wide, order = head[4] == 2, "<" if head[5] == 1 else ">"
+            if wide:
+                phoff, shoff = struct.unpack_from(order + "QQ", head, 32)
+                phentsize, phnum, shentsize, shnum = struct.unpack_from(order + "HHHH", head, 54)
+                seg = order + "8xQ16xQ"  # p_type, p_flags, p_offset, p_vaddr, p_paddr, p_filesz
+            else:
+                phoff, shoff = struct.unpack_from(order + "II", head, 28)
+                phentsize, phnum, shentsize, shnum = struct.unpack_from(order + "HHHH", head, 42)
+                seg = order + "4xI8xI"  # p_type, p_offset, p_vaddr, p_paddr, p_filesz
+            end = max(phoff + phentsize * phnum, shoff + shentsize * shnum)
+            fh.seek(phoff)
+            table = fh.read(phentsize * phnum)
+            if len(table) < phentsize * phnum:
+                return False
+            for k in range(phnum):
+                offset, filesz = struct.unpack_from(seg, table, k * phentsize)
+                end = max(end, offset + filesz)
+            return size >= end
+    except (OSError, struct.error):
+        return False

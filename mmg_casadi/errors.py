@@ -1,7 +1,8 @@
-"""Errors raised for bad user input.
+"""Errors raised for bad user input, and for a study that could not finish.
 
-Every error names the offending field and the allowed values, so the CLI can print one line and exit with
-status 2 instead of a traceback.
+Every input error names the offending field and the allowed values, so the CLI can print one line and exit with
+status 2 instead of a traceback. A :class:`RunError` (e.g. a batch whose worker died more often than it is
+retried) is printed as one line too, with exit status 1.
 """
 
 from __future__ import annotations
@@ -53,6 +54,26 @@ class ScenarioError(InputError):
     field, allowed, got
         As for :class:`InputError`.
     """
+
+
+class RunError(RuntimeError):
+    """A study stopped because some of its work could not be done; what it finished is kept.
+
+    The message says what failed and how to resume (the CLI prints it as one line and exits with status 1).
+
+    Parameters
+    ----------
+    message : str
+        One line: what failed, why, and what to do.
+
+    Examples
+    --------
+    >>> str(RunError("batch (environment 1, inverse-square, runs 0-127): the Ray worker died 4 times"))
+    'batch (environment 1, inverse-square, runs 0-127): the Ray worker died 4 times'
+    """
+
+    def __init__(self, message: str):
+        super().__init__(message)
 
 
 def check_range(field: str, value, low=None, high=None, *, low_open=False, high_open=False,

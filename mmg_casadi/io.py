@@ -10,9 +10,13 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from mmg_casadi.errors import InputError
 
 
 def json_safe(obj):
@@ -71,4 +75,88 @@ def write_text(path, text: str) -> Path:
     tmp = path.with_suffix(path.suffix + ".tmp")
     tmp.write_text(text, encoding="utf-8")
     tmp.replace(path)
+    return path
+
+
+def check_output(path, *, kind: str = "dir", field: str = "--out") -> Path:
+    """Refuse an output path that cannot be written, before any work: a probe file is created in its
+    directory (and the missing directories on the way), then everything the probe made is removed.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output directory (``kind="dir"``) or file (``kind="file"``; written atomically through
+        ``path + ".tmp"``, as :func:`write_text` does).
+    kind : {"dir", "file"}
+        What ``path`` names.
+    field : str, default '--out'
+        Name of the input field, used in the error message.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    InputError
+        ``path`` is a file where a directory is wanted (or the reverse), a parent is a file, or the
+        directory cannot be created or written (read-only file system, no permission, name too long, ...).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> check_output(d / "new" / "run") == d / "new" / "run", sorted(d.iterdir())
+    (True, [])
+    >>> (d / "f").write_text("x")
+    1
+    >>> check_output(d / "f")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.InputError: --out: expected a directory (or a new path), not an existing file, got '...f'
+    """
+    if kind not in ("dir", "file"):
+        raise ValueError(f"kind must be 'dir' or 'file', not {kind!r}")
+    path = Path(path)
+    if "\0" in str(path):  # pathlib's is_dir() and exists() answer False for it; open() raises ValueError
+        raise InputError(field, "a valid path (no NUL character)", str(path))
+    created: list[Path] = []
+    try:
+        if kind == "dir":
+            if path.exists() and not path.is_dir():
+                raise InputError(field, "a directory (or a new path), not an existing file", str(path))
+            directory = path
+        else:
+            for p in (path, path.with_name(path.name + ".tmp")):
+                if p.is_dir():
+                    raise InputError(field, "a file name, not an existing directory" + (f" ({p})" if p != path else ""),
+                                     str(path))
+            directory = path.parent
+        missing = []
+        d = directory
+        while not d.is_dir():
+            if d.exists() or d.is_symlink():
+                raise InputError(field, f"a path in directories only ({d} is a file or a broken link)", str(path))
+            missing.append(d)
+            d = d.parent
+        for d in reversed(missing):
+            d.mkdir()
+            created.append(d)
+        fd, probe = tempfile.mkstemp(dir=directory, prefix=".mmg-casadi-probe-")
+        os.close(fd)
+        os.unlink(probe)
+    except InputError:
+        raise
+    except OSError as err:
+        what = "directory" if kind == "dir" else "file"
+        raise InputError(field, f"a writable {what} ({err.strerror or err})", str(path)) from None
+    except ValueError as err:
+        raise InputError(field, f"a valid path ({err})", str(path)) from None
+    finally:
+        for d in reversed(created):
+            try:
+                d.rmdir()
+            except OSError:
+                pass
     return path

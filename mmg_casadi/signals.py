@@ -11,6 +11,11 @@
   parent is killed with SIGKILL and can run no cleanup: on Linux through ``prctl(PR_SET_PDEATHSIG, SIGTERM)``
   (``man 2 prctl``), elsewhere by a daemon thread that polls ``os.getppid()``.
 * :func:`stop_pool` — stop a process pool at once (interruption), without waiting for running tasks.
+* :func:`start_reaper` / :func:`stop_reaper` — a watchdog process (``mmg_casadi/_watchdog.py``, mode ``reap``)
+  that kills the processes of a local Ray cluster, agents included, when the study process dies (also by
+  SIGKILL) or has shut the cluster down (Linux; it follows the process tree in ``/proc``).
+
+The C compilers run under the same watchdog script (mode ``build``, :mod:`mmg_casadi.compiled`).
 """
 
 from __future__ import annotations
@@ -20,9 +25,13 @@ import ctypes
 import ctypes.util
 import os
 import signal
+import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
+
+from mmg_casadi import _watchdog
 
 TERMINATION_SIGNALS: tuple[int, ...] = (signal.SIGTERM, signal.SIGHUP)
 """Signals handled like Ctrl-C by :func:`terminate_as_interrupt`."""
@@ -30,6 +39,8 @@ PR_SET_PDEATHSIG = 1
 """``prctl`` option: signal delivered to this process when its parent thread exits (``<linux/prctl.h>``)."""
 PARENT_POLL_INTERVAL = 1.0
 """Seconds between two parent checks of the fallback watcher thread (platforms without ``prctl``)."""
+REAPER_STOP_TIMEOUT = _watchdog.REAP_GIVE_UP + 5.0
+"""Seconds :func:`stop_reaper` waits for the watchdog to finish before killing it."""
 
 
 class Terminated(KeyboardInterrupt):
@@ -271,3 +282,81 @@ def stop_pool(pool, timeout: float = 5.0) -> None:
         if proc.is_alive():
             proc.kill()
             proc.join(timeout)
+
+
+def child_pids(pid: int | None = None) -> set[int]:
+    """Pids of the live (not zombie) child processes of ``pid`` (default this process); empty off Linux.
+
+    Parameters
+    ----------
+    pid : int, optional
+        Parent process id; default ``os.getpid()``.
+
+    Returns
+    -------
+    set of int
+        The children found in ``/proc`` (an empty set where there is no ``/proc``).
+
+    Examples
+    --------
+    >>> child = subprocess.Popen(["sleep", "5"])
+    >>> child.pid in child_pids(), os.getpid() in child_pids()
+    (True, False)
+    >>> child.kill(); _ = child.wait()
+    """
+    if not Path("/proc/self/stat").exists():
+        return set()
+    return set(_watchdog.children_by_parent().get(os.getpid() if pid is None else pid, ()))
+
+
+def start_reaper(roots) -> subprocess.Popen | None:
+    """Start a watchdog that kills the processes ``roots`` and their descendants when this process dies or calls
+    :func:`stop_reaper` (module notes); None if ``roots`` is empty or there is no ``/proc`` (not Linux).
+
+    Parameters
+    ----------
+    roots : iterable of int
+        Pids of child processes of this process (e.g. those ``ray.init`` started: :func:`child_pids` after minus
+        before). Processes they start later are followed (a snapshot of the tree every 0.5 s).
+
+    Returns
+    -------
+    subprocess.Popen or None
+        The watchdog process, for :func:`stop_reaper`.
+
+    Examples
+    --------
+    >>> child = subprocess.Popen(["sleep", "60"])
+    >>> reaper = start_reaper({child.pid})
+    >>> stop_reaper(reaper)
+    >>> child.wait(5) == -signal.SIGKILL
+    True
+    """
+    roots = sorted(int(p) for p in roots)
+    if not roots or not Path("/proc/self/stat").exists():
+        return None
+    return subprocess.Popen([sys.executable, "-I", "-S", _watchdog.__file__, "reap", str(os.getpid()),
+                             *map(str, roots)], stdin=subprocess.PIPE)
+
+
+def stop_reaper(reaper: subprocess.Popen | None) -> None:
+    """Tell a watchdog of :func:`start_reaper` to kill what is left of its processes, and wait for it.
+
+    Parameters
+    ----------
+    reaper : subprocess.Popen or None
+        The watchdog (None: nothing to do). If it has not finished within :data:`REAPER_STOP_TIMEOUT` s it is
+        killed.
+    """
+    if reaper is None:
+        return
+    try:
+        reaper.stdin.write(b"stop\n")
+        reaper.stdin.close()
+    except OSError:  # it is gone already
+        pass
+    try:
+        reaper.wait(REAPER_STOP_TIMEOUT)
+    except subprocess.TimeoutExpired:
+        reaper.kill()
+        reaper.wait()

@@ -34,10 +34,12 @@ from matplotlib.figure import Figure
 
 from mmg_casadi.scenarios.encounters import colregs_cases, waypoint_square
 from mmg_casadi.io import write_json
+from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.errors import InputError
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
+from mmg_casadi.guidance.methods import parse_list as parse_methods
 from mmg_casadi.params import PARAMETERS, check_value, resolve
-from mmg_casadi.plotting import COLORS, draw_path, marine_axes
+from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_path, marine_axes
 from mmg_casadi.scenarios.scenario import scenario_from_dict, with_params
 from mmg_casadi.scenarios.run import run_scenario, write_outputs
 from tuning.pd.design import PdSpec, design_pd
@@ -170,12 +172,16 @@ def run(out, *, methods=None, params=None, current: float = 0.1, wind: float = 1
     wind : float
         Beam true wind speed (m/s).
     """
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     check_value("current_speed", current, field="current", cls=InputError)
     check_value("wind_speed", wind, field="wind", cls=InputError)
+    methods = parse_methods(methods or (DEFAULT_METHOD,))
+    resolved = resolve(params, prefix="params.")
+    # the square has the study's longest horizon: its steps (t_max / dt) are checked before the first run
+    build_problem(with_params(waypoint_square(), {**(params or {}), "ilos_k": ILOS_K}))
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
     dist = beam(current, wind)
-    metrics = {"params": resolve(params, prefix="params."), "current": current, "wind_m_s": wind,
+    metrics = {"params": resolved, "current": current, "wind_m_s": wind,
                "disturbances": dist, "straight_leg": {}, "square": {}, "encounters": {}}
 
     legs = {}
@@ -214,7 +220,7 @@ def run(out, *, methods=None, params=None, current: float = 0.1, wind: float = 1
         if case in ("head-on", "crossing"):
             for dname, d in dist.items():
                 cases[f"{case}-{dname}"] = with_params(sc, {**(params or {}), **d})
-    enc = run_cases(cases, methods or (DEFAULT_METHOD,), out / "encounters", title="disturbance")
+    enc = run_cases(cases, methods, out / "encounters", title="disturbance")
     metrics["encounters"] = {case: {m: {"collision": r["collision"],
                                         "min_distance": min((p["min_distance"] for p in r["pairs"]),
                                                             default=math.nan),
@@ -240,7 +246,7 @@ def _plot_legs(legs: dict, path) -> Figure:
         ax.set_title(f"straight leg, beam {dname}", fontsize=10)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=FIGURE_DPI)
     return fig
 
 
@@ -260,5 +266,5 @@ def _plot_squares(squares: dict, path) -> Figure:
         marine_axes(ax)
         ax.set_title(f"waypoint square, {dname}", fontsize=10)
         ax.legend(fontsize=7, loc="center")
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=FIGURE_DPI)
     return fig

@@ -18,6 +18,7 @@ from __future__ import annotations
 import csv
 import math
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -26,17 +27,21 @@ from matplotlib.figure import Figure
 from mmg_casadi.guidance import methods as registry
 from mmg_casadi.errors import InputError
 from mmg_casadi.io import write_json
-from mmg_casadi.montecarlo.study import run_study
+from mmg_casadi.limits import check_study_size
+from mmg_casadi.montecarlo.study import check_resumable, check_study_args, run_study
 from mmg_casadi.params import PARAMETERS, check_value
+from mmg_casadi.plotting import FIGURE_DPI
 from mmg_casadi.montecarlo.results import FAILURES, ResultsTable
-from mmg_casadi.montecarlo.sampling import parse_envs
 from mmg_casadi.montecarlo.stats import paired_comparison, wilson
 
 DEFAULT_METHODS = (registry.DEFAULT,)
 
 
-def parse_values(param: str, text) -> list:
+def parse_values(param: str, text, field: str = "values") -> list:
     """The swept values: a comma-separated string or a sequence, each checked against the parameter table.
+
+    Each text item is read as a TOML value, like ``--set`` (``40`` an integer, ``2.5`` a number, ``true`` a
+    boolean, a bare word a string), so integer, boolean and choice parameters can be swept too.
 
     Parameters
     ----------
@@ -44,33 +49,45 @@ def parse_values(param: str, text) -> list:
         Parameter name (:data:`mmg_casadi.params.PARAMETERS`).
     text : str or sequence
         Values, e.g. ``"10,15,20"``.
+    field : str, default 'values'
+        Name of the input field, used in the error message (e.g. ``"baseline"``).
 
     Examples
     --------
     >>> parse_values("r_safe", "10, 15,20")
     [10.0, 15.0, 20.0]
+    >>> parse_values("vo_candidates", "40,80"), parse_values("vo_hold", "true,false")
+    ([40, 80], [True, False])
     """
     if param not in PARAMETERS:
         raise InputError("param", "a parameter name (see `mmg-casadi params`)", param)
     items = [v.strip() for v in text.split(",")] if isinstance(text, str) else list(text)
     if not items or any(v == "" for v in items):
-        raise InputError("values", "a comma-separated list of values", text)
-    default = PARAMETERS[param].default
-    out = []
-    for v in items:
-        if isinstance(v, str) and isinstance(default, (int, float)) and not isinstance(default, bool):
-            try:
-                v = float(v)
-            except ValueError:
-                raise InputError("values", f"numbers for {param}", v) from None
-        out.append(check_value(param, v, field="values", cls=InputError))
+        raise InputError(field, "a comma-separated list of values", text)
+    out = [check_value(param, _toml_value(v) if isinstance(v, str) else v, field=field, cls=InputError)
+           for v in items]
     if len(set(out)) != len(out):
-        raise InputError("values", "distinct values", text)
+        raise InputError(field, "distinct values", text)
     return out
 
 
+def _toml_value(text: str):
+    """``text`` read as a TOML value; text that is not one (a bare word) is kept as the string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except (tomllib.TOMLDecodeError, RecursionError):  # not a TOML value (or nested too deep)
+        return text
+
+
+def _fmt(value) -> str:
+    """A swept value as text: ``:g`` for a number, else as written (``true``/``false`` for a boolean)."""
+    if isinstance(value, bool):
+        return str(value).lower()
+    return f"{value:g}" if isinstance(value, (int, float)) else str(value)
+
+
 def _label(param: str, value) -> str:
-    return f"{param}={value:g}" if isinstance(value, float) else f"{param}={value}"
+    return f"{param}={_fmt(value)}"
 
 
 def _outcomes(rows, env: int, method: str, runs: int) -> dict:
@@ -113,13 +130,18 @@ def run(out, *, param: str, values, baseline=None, runs: int = 200, envs="5", me
         Ray address.
     """
     vals = parse_values(param, values)
-    base_v = PARAMETERS[param].default if baseline is None else parse_values(param, [baseline])[0]
+    base_v = PARAMETERS[param].default if baseline is None else parse_values(param, [baseline], "baseline")[0]
     if base_v not in vals:
         vals = [base_v, *vals]
-    envs = parse_envs(envs) if isinstance(envs, str) else tuple(int(e) for e in envs)
-    methods = registry.parse_list(methods or DEFAULT_METHODS)
     others = {k: v for k, v in (params or {}).items() if k != param}
     out = Path(out)
+    for v in vals:  # every value's study checked (and its stored runs) before the first one runs
+        args = check_study_args(runs=runs, envs=envs, methods=methods or DEFAULT_METHODS, base_seed=base_seed,
+                                params={**others, param: v}, workers=workers, backend=backend, address=address)
+        check_resumable(out / _label(param, v), runs=args["runs"], envs=args["envs"], methods=args["methods"],
+                        base_seed=args["base_seed"], params=args["params"], ranges=args["ranges"])
+    envs, methods = args["envs"], args["methods"]
+    check_study_size(args["runs"], len(envs) * len(methods) * len(vals))  # every value's rows are read at the end
     rows_by_value = {}
     for v in vals:
         d = out / _label(param, v)
@@ -178,11 +200,11 @@ def markdown(table: list, param: str) -> str:
     param : str
         Swept parameter (column title).
     """
-    lines = [f"| env | method | {param} | success [95 % CI] | Δ vs {table[0]['baseline']:g} [95 % CI] | "
+    lines = [f"| env | method | {param} | success [95 % CI] | Δ vs {_fmt(table[0]['baseline'])} [95 % CI] | "
              "McNemar p | collision / stalled / timeout / diverged | CE | MCTE |",
              "|---|---|---|---|---|---|---|---|---|"]
     for r in table:
-        lines.append(f"| {r['environment']} | {r['method']} | {r['value']:g} | {r['success_rate']:.4f} "
+        lines.append(f"| {r['environment']} | {r['method']} | {_fmt(r['value'])} | {r['success_rate']:.4f} "
                      f"[{r['success_ci_low']:.4f}, {r['success_ci_high']:.4f}] | {r['difference']:+.4f} "
                      f"[{r['difference_ci_low']:+.4f}, {r['difference_ci_high']:+.4f}] | {r['p_value']:.3g} | "
                      f"{r['failures_collision']} / {r['failures_stalled']} / {r['failures_timeout']} / "
@@ -205,9 +227,11 @@ def plot_sweep(table: list, param: str, path) -> Figure:
     fig = Figure(figsize=(10, 4), layout="constrained")
     ax, ax2 = fig.subplots(1, 2)
     cells = list(dict.fromkeys((r["environment"], r["method"]) for r in table))
+    values = sorted({r["value"] for r in table})
+    numeric = all(isinstance(v, (int, float)) for v in values)  # else (a choice parameter) one slot per value
     for e, m in cells:
         rs = sorted((r for r in table if r["environment"] == e and r["method"] == m), key=lambda r: r["value"])
-        x = np.array([r["value"] for r in rs], float)
+        x = np.array([r["value"] if numeric else values.index(r["value"]) for r in rs], float)
         y = np.array([r["success_rate"] for r in rs])
         err = np.array([[r["success_rate"] - r["success_ci_low"] for r in rs],
                         [r["success_ci_high"] - r["success_rate"] for r in rs]])
@@ -218,19 +242,24 @@ def plot_sweep(table: list, param: str, path) -> Figure:
                             xytext=(4, 6), fontsize=7)
         bottom = np.zeros(len(rs))
         for f in FAILURES[1:]:
-            c = np.array([r[f"failures_{f}"] for r in rs], float)
+            c = np.array([r.get(f"failures_{f}", 0) for r in rs], float)  # tables older than a kind: none
             if c.any():
                 ax2.bar(x + 0.0, c, bottom=bottom, width=0.6 * (np.min(np.diff(x)) if len(x) > 1 else 1.0),
                         label=f"{f} (env {e} {m})" if len(cells) > 1 else f)
                 bottom += c
-    ax.set_xlabel(param)
+    if not numeric:
+        for a in (ax, ax2):
+            a.set_xticks(range(len(values)), [_fmt(v) for v in values])
+    unit = PARAMETERS[param].unit if param in PARAMETERS else ""
+    xlabel = f"{param} [{unit or '-'}]"
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("success rate [%] (95 % Wilson CI)")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    ax2.set_xlabel(param)
-    ax2.set_ylabel("failed runs")
+    ax2.set_xlabel(xlabel)
+    ax2.set_ylabel("failed runs [count]")
     ax2.grid(True, alpha=0.3)
     if ax2.get_legend_handles_labels()[0]:
         ax2.legend(fontsize=8)
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=FIGURE_DPI)
     return fig

@@ -9,14 +9,18 @@ from __future__ import annotations
 import math
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+import casadi as ca
 import pytest
 
-from mmg_casadi.montecarlo.batching import BatchTask, LocalExecutor, RayExecutor
+from mmg_casadi.compiled import BUILD_PREFIX, compile_function, library_is_complete, library_path
+from mmg_casadi.errors import RunError
+from mmg_casadi.montecarlo.batching import RAY_MAX_RETRIES, BatchTask, LocalExecutor, RayExecutor
 from mmg_casadi.montecarlo.execution import TIMING_COLUMNS, run_batch
 from mmg_casadi.montecarlo.results import RUN_COLUMNS, ResultsTable
 from mmg_casadi.signals import Terminated, exit_status, terminate_as_interrupt
@@ -230,32 +234,214 @@ def test_sigterm_mid_ray_study_exits_143_without_orphans(tmp_path, cli):
     assert _wait_gone(proc.pid, 10.0) == []
 
 
-def _group_commands(pgid: int) -> list[str]:
+def _processes_naming(text: str) -> list[str]:
+    """Names of the live processes whose command line contains ``text`` (from /proc)."""
     out = []
-    for pid in _live_group_members(pgid):
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
         try:
-            out.append(Path(f"/proc/{pid}/comm").read_text().strip())
+            cmdline = (entry / "cmdline").read_bytes()
+            stat = (entry / "stat").read_text()
+            comm = (entry / "comm").read_text().strip()
         except OSError:
-            pass
+            continue
+        if text.encode() in cmdline and stat[stat.rindex(")") + 2] != "Z":
+            out.append(comm)
     return out
 
 
-@pytest.mark.slow
-def test_sigterm_during_the_first_compile_does_not_wait_for_the_compiler(tmp_path, cli, monkeypatch):
-    # a fresh cache: the study first compiles its closed loop in a process pool (tens of seconds for the
-    # velocity obstacle); SIGTERM must stop the pool at once instead of waiting for the compile to finish
-    monkeypatch.setenv("MMG_CASADI_CACHE", str(tmp_path / "cache"))
-    study = ["study", "statistics", "--runs", "1", "--envs", "1", "--methods", "velocity-obstacle",
-             "--workers", "2", "--out", str(tmp_path / "out")]
-    proc = cli(study)
+def _wait_until(condition, timeout: float) -> bool:
     t0 = time.monotonic()
-    while "cc1" not in _group_commands(proc.pid):
-        assert proc.poll() is None and time.monotonic() - t0 < 300, "no compiler started"
+    while not condition():
+        if time.monotonic() - t0 > timeout:
+            return False
         time.sleep(0.05)
+    return True
+
+
+def _fleet_scenario(path: Path, ships: int = 60) -> Path:
+    subprocess.run([sys.executable, "-m", "mmg_casadi.cli", "traffic", str(ships), "--out", str(path)], check=True,
+                   capture_output=True)
+    return path
+
+
+@pytest.mark.parametrize("where", ["pool", pytest.param("main", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
+def test_signal_during_the_first_compile_leaves_no_compiler_and_no_build_folder(tmp_path, cli, monkeypatch, sig,
+                                                                                where):
+    # an empty cache: the study compiles its closed loop in a forked pool worker ("pool"; the velocity obstacle
+    # takes tens of seconds), `simulate` of a 60-ship scenario in the main process ("main"). The compiler and its
+    # cc1 run under a watchdog in a process group of their own, in <cache>/.build-*; whatever kills the study,
+    # they must be gone at once, the folder too (before: cc1 ran on for 12-70 s, the folder stayed)
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("MMG_CASADI_CACHE", str(cache))
+    if where == "pool":
+        args = ["study", "statistics", "--runs", "1", "--envs", "1", "--methods", "velocity-obstacle", "--workers",
+                "2"]
+    else:
+        args = ["simulate", str(_fleet_scenario(tmp_path / "fleet.toml"))]
+    proc = cli([*args, "--out", str(tmp_path / "out")])
+    assert _wait_until(lambda: "cc1" in _processes_naming(str(cache)) or proc.poll() is not None, 300)
+    assert proc.poll() is None, proc.communicate()
     t_signal = time.monotonic()
-    proc.send_signal(signal.SIGTERM)
+    proc.send_signal(sig)
     _o, stderr = proc.communicate(timeout=60)
-    assert proc.returncode == 143, stderr
-    assert time.monotonic() - t_signal < 10.0
-    # the pool workers are gone; the C compilers they started finish their file on their own
-    assert not [c for c in _group_commands(proc.pid) if c.startswith("python")]
+    assert proc.returncode == (143 if sig == signal.SIGTERM else -signal.SIGKILL), stderr
+    assert time.monotonic() - t_signal < 10.0  # nobody waits for the compiler
+    gone = _wait_until(lambda: not _processes_naming(str(cache)) and not any(p.is_dir() for p in cache.iterdir()),
+                       5.0)
+    assert gone, (_processes_naming(str(cache)), list(cache.iterdir()))
+    assert not list(cache.glob("*.so"))  # the compile was stopped, not finished
+
+
+def test_a_cut_short_cached_library_is_rebuilt_not_loaded(tmp_path, monkeypatch):
+    monkeypatch.setenv("MMG_CASADI_CACHE", str(tmp_path))
+    x = ca.SX.sym("x")
+    f = ca.Function("cut_short_square", [x], [x**2 + 1])
+    compile_function(f)
+    so, _src = library_path(f)
+    whole = so.read_bytes()
+    for n in (0, 100, len(whole) // 2, len(whole) - 1):
+        cut = tmp_path / "cut"
+        cut.write_bytes(whole[:n])
+        os.replace(cut, so)  # a new file: the loaded library keeps its own
+        assert not library_is_complete(so)
+        g = compile_function(f)
+        assert so.read_bytes() == whole and library_is_complete(so)
+        assert float(g(3.0)) == 10.0
+
+
+def test_build_folders_of_dead_processes_are_removed_by_the_next_compile(tmp_path, monkeypatch):
+    monkeypatch.setenv("MMG_CASADI_CACHE", str(tmp_path))
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    host = socket.gethostname()
+    stale = tmp_path / f"{BUILD_PREFIX}{dead.pid}-0badc0de@{host}"
+    live = tmp_path / f"{BUILD_PREFIX}{os.getpid()}-0badc0de@{host}"  # e.g. a concurrent compile of this process
+    other_host = tmp_path / f"{BUILD_PREFIX}{dead.pid}-0badc0de@not-{host}"  # a shared cache: not ours to judge
+    for d in (stale, live, other_host):
+        d.mkdir()
+        (d / "part.c").write_text("int x;")
+    x = ca.SX.sym("x")
+    compile_function(ca.Function("stale_sweep_square", [x], [x**2]))
+    assert not stale.exists() and live.exists() and other_host.exists()
+
+
+def test_reaper_kills_the_tree_it_guards_when_its_parent_is_killed(tmp_path):
+    # a "driver" process starts a child that starts a grandchild, guards the child with start_reaper and is
+    # killed with SIGKILL: both descendants must die at once
+    pids = tmp_path / "pids"
+    driver = subprocess.Popen([sys.executable, "-c", (
+        "import subprocess, sys, time\n"
+        "from mmg_casadi.signals import start_reaper\n"
+        "child = subprocess.Popen([sys.executable, '-c', 'import subprocess, time; "
+        "subprocess.Popen([\"sleep\", \"60\"]); time.sleep(60)'])\n"
+        "start_reaper([child.pid])\n"
+        "time.sleep(1.0)\n"
+        f"open({str(pids)!r}, 'w').write(str(child.pid))\n"
+        "time.sleep(60)\n")])
+    try:
+        assert _wait_until(lambda: pids.exists() and pids.read_text(), 30)
+        child = int(pids.read_text())
+        tree = [child, *_children(child)]
+        assert len(tree) == 2
+        driver.kill()
+        driver.wait()
+        assert _wait_until(lambda: not [p for p in tree if _alive(p)], 5.0)
+    finally:
+        driver.kill()
+        driver.wait()
+
+
+def _children(pid: int) -> list[int]:
+    return [int(e.name) for e in Path("/proc").iterdir() if e.name.isdigit() and _ppid(int(e.name)) == pid]
+
+
+def _ppid(pid: int):
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    return int(stat[stat.rindex(")") + 2:].split()[1])
+
+
+def _alive(pid: int) -> bool:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat[stat.rindex(")") + 2] != "Z"
+
+
+class _AlwaysDies(BatchTask):
+    """A batch whose worker process dies (SIGKILL) every time it runs it."""
+
+    def __call__(self):
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
+@pytest.mark.slow  # ~40 s on 2 busy cores: a local cluster and four worker starts
+def test_ray_batch_lost_on_every_retry_ends_in_one_run_error_after_the_other_batches(tmp_path):
+    pytest.importorskip("ray")
+    from ray import cloudpickle
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    tasks = [BatchTask(1, METHOD, (0, 1)), _AlwaysDies(1, METHOD, (2, 3)), BatchTask(1, METHOD, (4, 5))]
+    done = []
+    with RayExecutor(num_cpus=2) as ex:  # its own local cluster: close() also stops the reaper
+        with pytest.raises(RunError) as err:
+            for task, rows in ex.run(tasks):
+                done += [r["run"] for r in rows]
+        reaper = ex._reaper
+    assert sorted(done) == [0, 1, 4, 5]  # the other batches finished and were yielded
+    msg = str(err.value)
+    assert "\n" not in msg and "environment 1, inverse-square, runs 2-3" in msg and "WorkerCrashedError" in msg
+    assert f"{RAY_MAX_RETRIES} retries" in msg and "rerun the same command" in msg
+    assert reaper is not None and reaper.returncode == 0
+
+
+def test_cli_prints_a_run_error_as_one_line_exit_1_and_keeps_the_finished_rows(tmp_path, monkeypatch, capsys):
+    from mmg_casadi.cli import main
+    from mmg_casadi.montecarlo import study
+
+    class _LosesTheRest:
+        def __init__(self, workers=None):
+            self.parallelism = 1
+
+        def run(self, tasks):
+            first = min(tasks, key=lambda t: len(t.runs))
+            yield first, first()
+            raise RunError("backend ray: the batch of environment 1 was lost")
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(study, "LocalExecutor", _LosesTheRest)
+    out = tmp_path / "out"
+    status = main(["study", "statistics", "--runs", "130", "--envs", "1", "--methods", METHOD, "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 1
+    assert err[-1] == "mmg-casadi: error: backend ray: the batch of environment 1 was lost"
+    assert "Traceback" not in "\n".join(err)
+    assert sorted(r["run"] for r in ResultsTable(out / "runs.csv").read()) == [128, 129]
+
+
+@pytest.mark.slow
+def test_sigkill_of_a_ray_study_leaves_no_ray_process(tmp_path, cli):
+    # before: the dashboard and runtime-env agents of the local cluster lived on for 60-90 s after the driver
+    pytest.importorskip("ray")
+    out = tmp_path / "ray"
+    proc = cli(["study", "statistics", "--runs", "3000", "--envs", "1", "--methods", METHOD, "--workers", "2",
+                "--backend", "ray", "--out", str(out)])
+    _wait_for_rows(out / "runs.csv", proc)
+    time.sleep(1.0)  # the reaper has taken a snapshot of the running cluster
+    tree, todo = [], [proc.pid]
+    while todo:
+        pid = todo.pop()
+        tree.append(pid)
+        todo += _children(pid)
+    assert len(tree) >= 4, "the local Ray cluster runs no process"
+    proc.kill()
+    proc.communicate(timeout=30)
+    assert _wait_until(lambda: not [p for p in tree if _alive(p)], 5.0), [
+        Path(f"/proc/{p}/cmdline").read_bytes().split(b"\0")[0] for p in tree if _alive(p)]

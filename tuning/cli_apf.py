@@ -30,7 +30,8 @@ from pathlib import Path
 from mmg_casadi.errors import InputError
 from mmg_casadi.io import write_json
 from mmg_casadi.montecarlo.results import ResultsTable
-from mmg_casadi.montecarlo.study import run_study
+from mmg_casadi.limits import MAX_RUNS, check_runs
+from mmg_casadi.montecarlo.study import check_resumable, check_study_args, run_study
 from mmg_casadi.params import PARAMETERS, resolve
 from mmg_casadi.scenarios.scenario import with_params
 
@@ -123,14 +124,18 @@ def heldout(out, sets: dict, *, runs: int, envs, base_seed: int, workers=None) -
 
 
 def _check_settings(path: Path, settings: dict) -> None:
-    """Record the settings of the training objective in ``path``; refuse to resume a directory whose stored
-    evaluations were made with other settings (the evaluation log is keyed by θ only)."""
+    """Refuse to resume a directory whose stored evaluations were made with other settings of the training
+    objective (the evaluation log is keyed by θ only); writes nothing."""
     if path.exists():
-        stored = json.loads(path.read_text(encoding="utf-8"))
+        try:
+            stored = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            raise InputError("out", f"a directory whose {path.name} is readable (or a new directory)",
+                             str(path.parent)) from None
         if stored != json.loads(json.dumps(settings)):
-            key = next((k for k in settings if stored.get(k) != json.loads(json.dumps(settings[k]))), "config")
+            key = next((k for k in settings if not isinstance(stored, dict)
+                        or stored.get(k) != json.loads(json.dumps(settings[k]))), "config")
             raise InputError("out", f"a new directory, or the {key!r} that {path} records", str(path.parent))
-    write_json(path, settings)
 
 
 def _markdown(report: dict) -> str:
@@ -167,9 +172,9 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
         Output directory (``params.toml``, ``report.json``, ``report.md``, ``evaluations.jsonl``,
         ``heldout/``); rerun with the same directory to resume.
     train : int
-        Sampled training scenarios (plus the paper's five encounters).
+        Sampled training scenarios (plus the paper's five encounters), in [0, MAX_RUNS].
     holdout : int
-        Held-out runs per environment and parameter set.
+        Held-out runs per environment and parameter set, in [1, MAX_RUNS].
     params : dict, optional
         Parameter overrides every run uses (the tuned entries are replaced).
     config : SafetyConfig, optional
@@ -179,33 +184,47 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
     starts : int
         L-BFGS-B starts (from the best grid points).
     grid : int
-        Grid points per tuned parameter of the coarse sweep.
+        Grid points per tuned parameter of the coarse sweep, in [1, :data:`tuning.search.MAX_GRID`].
     max_iter : int
         L-BFGS-B iterations per start.
     target : tuple of int
         Environments where the tuned set must be significantly better to be called an improvement.
     workers : int, optional
         Worker processes of the held-out study.
+
+    Notes
+    -----
+    Every argument, the held-out study's included, is checked before any work (and before ``out`` is made).
     """
     train = _count("train", train, 0)
-    holdout = _count("holdout", holdout, 1)
+    if train > MAX_RUNS:
+        raise InputError("train", f"an integer in [0, {MAX_RUNS}] (MAX_RUNS)", train)
+    holdout = check_runs(_count("holdout", holdout, 1), "holdout")
     starts = _count("starts", starts, 1)
     grid = _count("grid", grid, 1)
+    search.grid(grid)  # its bound (MAX_GRID)
     max_iter = _count("max_iter", max_iter, 1)
-    envs = tuple(int(e) for e in envs)
-    if not set(target) <= set(envs):
-        raise InputError("target", f"environments among the held-out ones {list(envs)}", list(target))
     base = resolve(params, prefix="params.")
     extra = {k: v for k, v in _non_default(params).items() if k not in ("k_vor0", "lam_sink", "r_safe")}
+    paper = {"k_vor0": safety.PAPER[0], "lam_sink": safety.LAM_SINK, "r_safe": safety.PAPER[1]}
+    # the held-out study's arguments, checked before the search (which takes minutes)
+    args = check_study_args(runs=holdout, envs=envs, methods=(METHOD,), base_seed=apf.HOLDOUT_SEED,
+                            params={**extra, **paper}, workers=workers)
+    envs = args["envs"]
+    if not set(target) <= set(envs):
+        raise InputError("target", f"environments among the held-out ones {list(envs)}", list(target))
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    check_resumable(out / "heldout" / "paper", runs=holdout, envs=envs, methods=(METHOD,),
+                    base_seed=apf.HOLDOUT_SEED, params=args["params"])
     config = config or safety.SafetyConfig()
+    settings = {"config": {**config.__dict__}, "train": train, "train_envs": list(TRAIN_ENVS),
+                "train_seed": apf.TRAIN_SEED, "params": extra}
+    _check_settings(out / "tuning.json", settings)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "tuning.json", settings)
     timings = {}
     t_start = time.perf_counter()
 
-    _check_settings(out / "tuning.json", {"config": {**config.__dict__}, "train": train,
-                                          "train_envs": list(TRAIN_ENVS), "train_seed": apf.TRAIN_SEED,
-                                          "params": extra})
     _say(f"[1/4] training set: 5 paper encounters + {train} sampled scenarios (environments "
          f"{','.join(map(str, TRAIN_ENVS))}, seed {apf.TRAIN_SEED})")
     t0 = time.perf_counter()
@@ -230,7 +249,6 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
     t0 = time.perf_counter()
     found = search.search(objective, out, grid_n=grid, starts=starts, max_iter=max_iter, report=_say)
     timings["search_s"] = time.perf_counter() - t0
-    paper = {"k_vor0": safety.PAPER[0], "lam_sink": safety.LAM_SINK, "r_safe": safety.PAPER[1]}
     best = dict(zip(safety.THETA, found["best"]["theta"]))
     tuned = {"k_vor0": best["k_vor0"], "lam_sink": safety.LAM_SINK, "r_safe": best["r_safe"]}
     _say(f"  best: {tuned} objective {found['best']['objective']:.6f} (paper {found['paper']['objective']:.6f})")

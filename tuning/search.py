@@ -88,21 +88,26 @@ class EvaluationLog:
             fh.flush()
 
 
+MAX_GRID = 100
+"""Largest ``--grid`` of ``tune apf`` (points per tuned parameter): the sweep evaluates ``n²`` points, each a
+rollout of the whole training set with its gradient (about a minute on 2 cores)."""
+
+
 def grid(n: int) -> list[tuple[float, float]]:
     """The paper's values, then ``n × n`` evenly spaced points of the box (row-major; ``n = 1``: paper only).
 
     Parameters
     ----------
     n : int
-        Points per parameter (≥ 1).
+        Points per parameter, in [1, :data:`MAX_GRID`].
 
     Examples
     --------
     >>> len(grid(3)), grid(1)
     (10, [(-10.0, 15.0)])
     """
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise InputError("grid", "an integer >= 1", n)
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_GRID:
+        raise InputError("grid", f"an integer in [1, {MAX_GRID}] (MAX_GRID)", n)
     pts = [tuple(PAPER)]
     if n > 1:
         axes = [np.linspace(lo, hi, n) for lo, hi in BOUNDS]

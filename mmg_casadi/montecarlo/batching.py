@@ -22,10 +22,12 @@ import numpy as np
 
 from mmg_casadi.compiled import library_path
 from mmg_casadi.closed_loop.simulation import compiled_step, rollout_functions
-from mmg_casadi.errors import InputError
+from mmg_casadi.errors import InputError, RunError
+from mmg_casadi.limits import MAX_WORKERS_PER_CORE, max_workers
 from mmg_casadi.montecarlo.disturbance_sampling import DisturbanceRanges
 from mmg_casadi.montecarlo.execution import DEFAULT_CHUNK, _non_default, run_batch
-from mmg_casadi.signals import keep_termination_handlers, stop_pool, worker_initializer
+from mmg_casadi.signals import (child_pids, keep_termination_handlers, start_reaper, stop_pool, stop_reaper,
+                                worker_initializer)
 
 BACKENDS: tuple[str, ...] = ("local", "ray")
 DEFAULT_BATCH = 128
@@ -190,8 +192,9 @@ def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
 def _check_workers(field: str, value):
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise InputError(field, "an integer >= 1 (or nothing for all cores)", value)
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= max_workers():
+        raise InputError(field, f"an integer in [1, {max_workers()}] ({MAX_WORKERS_PER_CORE} per core; or nothing "
+                         "for all cores)", value)
     return int(value)
 
 
@@ -199,6 +202,8 @@ WORKER_JOIN_TIMEOUT = 5.0
 """Seconds to wait for each terminated pool worker to exit when a study is interrupted."""
 RAY_MAX_RETRIES = 3
 """Times Ray reruns a batch whose worker process died (its rows are appended once: appends skip stored keys)."""
+RAY_LOST = ("WorkerCrashedError", "NodeDiedError", "OutOfMemoryError", "ObjectLostError", "LocalRayletDiedError")
+"""``ray.exceptions`` that mean a batch was lost with its worker or node (not an error of the batch itself)."""
 
 
 class LocalExecutor:
@@ -267,7 +272,13 @@ class RayExecutor:
     multi-machine cluster, point it at a shared directory or let each machine compile once). A batch whose
     worker dies is rerun up to :data:`RAY_MAX_RETRIES` times (a batch that raises is not); each batch result
     is yielded once and :meth:`ResultsTable.append <mmg_casadi.montecarlo.results.ResultsTable.append>` skips stored
-    keys, so no run is lost or counted twice.
+    keys, so no run is lost or counted twice. A batch lost more often (:data:`RAY_LOST`) does not stop the
+    others: once they are done, :meth:`run` raises :class:`~mmg_casadi.errors.RunError` naming it.
+
+    A local cluster started here is guarded by a watchdog process (:func:`~mmg_casadi.signals.start_reaper`,
+    Linux): if this process dies, even by SIGKILL, the cluster's processes (raylet, GCS, agents, workers) are
+    killed at once instead of lingering for a minute; :meth:`close` also kills any of them left after
+    ``ray.shutdown()``.
 
     Parameters
     ----------
@@ -281,6 +292,7 @@ class RayExecutor:
         self.address = address
         self.num_cpus = _check_workers("workers", num_cpus)
         self._owns = False
+        self._reaper = None
         try:
             import ray  # noqa: F401  (optional dependency: is it installed?)
         except ImportError:
@@ -301,9 +313,11 @@ class RayExecutor:
             kw["num_cpus"] = self.num_cpus
         if renv:
             kw["runtime_env"] = renv
+        before = child_pids()
         with keep_termination_handlers():  # SIGTERM keeps the CLI's resume path
             ray.init(**kw)
         self._owns = True
+        self._reaper = start_reaper(child_pids() - before)  # none when ray.init joined a running cluster
         return {}
 
     @property
@@ -329,13 +343,20 @@ class RayExecutor:
         remote = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES, retry_exceptions=False)(_run_task)
         if opts:
             remote = remote.options(**opts)
+        lost_types = tuple(getattr(ray.exceptions, name) for name in RAY_LOST if hasattr(ray.exceptions, name))
         refs = {remote.remote(t): t for t in tasks}
         pending = list(refs)
+        lost = []
         try:
             while pending:
                 ready, pending = ray.wait(pending, num_returns=1)
                 for ref in ready:
-                    yield refs[ref], ray.get(ref)
+                    try:
+                        rows = ray.get(ref)
+                    except lost_types as err:  # retries used up: the other batches go on, the error comes last
+                        lost.append((refs[ref], type(err).__name__))
+                        continue
+                    yield refs[ref], rows
         finally:
             # a Ray this executor started is shut down by close(), which stops its tasks; cancelling them here
             # as well can race with a task completing and abort the driver (Ray 2.60 task_manager check)
@@ -344,15 +365,29 @@ class RayExecutor:
                     ray.cancel(ref, force=True)
                 except Exception:  # noqa: BLE001 - best effort on interruption
                     pass
+        if lost:
+            raise RunError(_lost_message(lost, len(tasks)))
 
     def close(self) -> None:
         if self._owns:
             import ray  # optional dependency (extra [ray]): imported where used
             ray.shutdown()
             self._owns = False
+            stop_reaper(self._reaper)
+            self._reaper = None
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _lost_message(lost, n_tasks: int) -> str:
+    """One line for the batches a Ray study lost: the first of them, how many, and how to resume."""
+    task, name = lost[0]
+    runs = f"run {task.runs[0]}" if len(task.runs) == 1 else f"runs {task.runs[0]}-{task.runs[-1]}"
+    more = f" (and {len(lost) - 1} more of the {n_tasks} batches)" if len(lost) > 1 else ""
+    return (f"backend ray: the batch of environment {task.environment}, {task.method}, {runs}{more} was lost "
+            f"({name}: its worker died, also on each of the {RAY_MAX_RETRIES} retries, e.g. out of memory or "
+            "killed); the finished runs are kept, rerun the same command to run the missing ones")
