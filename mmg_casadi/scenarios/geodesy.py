@@ -1,13 +1,27 @@
-"""WGS-84 geodesy of the maritime-schema interchange: latitude/longitude on a local tangent plane and back.
+"""WGS-84 geodesy of the maritime-schema interchange: latitude/longitude on a local plane and back.
 
-Positions are mapped to a local tangent plane (x north, y east, metres) at a reference point on the WGS-84
-ellipsoid (a = 6378137 m, f = 1/298.257223563): geodetic → Earth-centred Earth-fixed → rotation into the
-reference's north/east/up frame, dropping "up". The map preserves distances from the reference to within
-d³/(6R²) (0.5 m at d = 50 km) and is inverted exactly (to < 1 mm) by a short fixed-point iteration. Courses and
-headings are given against the local north of each ship; they are turned into the plane by projecting the ship's
-local direction (this accounts for the convergence of the meridians, 0.7° at 50 km east of the reference at
-58° N). Used by :mod:`mmg_casadi.scenarios.maritime_schema` (reading) and
-:mod:`mmg_casadi.scenarios.maritime_export` (writing).
+The plane (x north, y east, metres) is the ellipsoidal azimuthal equidistant projection about a reference point:
+a point at geodesic distance ``s`` and azimuth ``a`` from the reference goes to ``(s cos a, s sin a)``. Distances
+and azimuths are those of the geodesic on the WGS-84 ellipsoid (a = 6378137 m, f = 1/298.257223563), computed
+with Karney's algorithms (C. F. F. Karney, "Algorithms for geodesics", J. Geodesy 87, 43-55, 2013,
+doi:10.1007/s00190-012-0578-z) as implemented in his ``geographiclib`` package: the map and its inverse agree to
+a few nanometres, and distances and bearings from the reference are exact.
+
+A projection cannot keep every distance. About the reference the azimuthal equidistant one stretches distances
+across the radial direction by ``s/m`` (``m`` the reduced length of the geodesic, Karney 2013; ``s/m - 1`` is
+about ``s²/(6 R²)``), so the error of a distance between two points grows as the cube of their distance from the
+reference. Positions are therefore accepted only within :data:`MAX_RANGE` of the reference: there every distance
+between two accepted points is within 0.7 m of the geodesic one (largest over pairs of points on circles about
+the reference at 0°, ±58° and 80° of latitude: 0.4 m within 50 km, 0.7 m within 60 km, 1.1 m within 70 km,
+3.1 m within 100 km). A position beyond it raises a :class:`~mmg_casadi.errors.ScenarioError` naming the field
+and the range.
+
+Courses and headings are given against the local north of each ship. The plane's Jacobian at a point maps them
+exactly: along the geodesic from the reference (azimuth ``a2`` at the point) the scale is 1, across it ``s/m``
+(GeographicLib's ``AzimuthalEquidistant`` returns ``m/s`` as its reciprocal azimuthal scale), so a course ``c``
+becomes the plane angle ``a1 + atan2(sin(c - a2) s/m, cos(c - a2))``;
+:meth:`LocalPlane.course_from_plane` inverts it. Used by
+:mod:`mmg_casadi.scenarios.maritime_schema` (reading) and :mod:`mmg_casadi.scenarios.maritime_export` (writing).
 """
 
 from __future__ import annotations
@@ -15,46 +29,20 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
+from geographiclib.geodesic import Geodesic
 
-WGS84_A = 6378137.0
-"""WGS-84 semi-major axis [m]."""
-WGS84_F = 1.0 / 298.257223563
-"""WGS-84 flattening."""
-WGS84_E2 = WGS84_F * (2.0 - WGS84_F)
+from mmg_casadi.errors import ScenarioError
 
+WGS84 = Geodesic.WGS84
+"""The WGS-84 ellipsoid's geodesic (Karney 2013; ``geographiclib``)."""
+MAX_RANGE = 60_000.0
+"""Largest accepted geodesic distance from the plane's reference [m] (there distances are kept to < 1 m)."""
 
-def _ecef(lat: float, lon: float, h: float = 0.0) -> np.ndarray:
-    phi, lam = math.radians(lat), math.radians(lon)
-    n = WGS84_A / math.sqrt(1.0 - WGS84_E2 * math.sin(phi) ** 2)
-    return np.array([(n + h) * math.cos(phi) * math.cos(lam), (n + h) * math.cos(phi) * math.sin(lam),
-                     (n * (1.0 - WGS84_E2) + h) * math.sin(phi)])
-
-
-def _geodetic(p) -> tuple[float, float, float]:
-    """(lat, lon, h) of an ECEF point (iterated to 1e-14 rad)."""
-    x, y, z = p
-    lon = math.atan2(y, x)
-    r = math.hypot(x, y)
-    lat = math.atan2(z, r * (1.0 - WGS84_E2))
-    for _ in range(10):
-        n = WGS84_A / math.sqrt(1.0 - WGS84_E2 * math.sin(lat) ** 2)
-        h = r / math.cos(lat) - n if abs(lat) < math.pi / 4 else z / math.sin(lat) - n * (1.0 - WGS84_E2)
-        new = math.atan2(z, r * (1.0 - WGS84_E2 * n / (n + h)))
-        if abs(new - lat) < 1e-14:
-            lat = new
-            break
-        lat = new
-    n = WGS84_A / math.sqrt(1.0 - WGS84_E2 * math.sin(lat) ** 2)
-    h = r / math.cos(lat) - n if abs(lat) < math.pi / 4 else z / math.sin(lat) - n * (1.0 - WGS84_E2)
-    return math.degrees(lat), math.degrees(lon), h
-
-
-def _neu(lat: float, lon: float) -> np.ndarray:
-    """Rows: unit north, east, up vectors (ECEF) at a point."""
-    phi, lam = math.radians(lat), math.radians(lon)
-    sp, cp, sl, cl = math.sin(phi), math.cos(phi), math.sin(lam), math.cos(lam)
-    return np.array([[-sp * cl, -sp * sl, cp], [-sl, cl, 0.0], [cp * cl, cp * sl, sp]])
+_INVERSE = Geodesic.STANDARD | Geodesic.REDUCEDLENGTH
+_UNIT_SCALE_BELOW = 1.0
+"""Closer to the reference than this [m] the across-track scale ``s/m`` is taken as 1."""
+_SLACK = 1e-6
+"""A point this far [m] beyond ``max_range`` still counts (so a point written at the range, rounded, reads back)."""
 
 
 def wrap_360(angle_deg: float) -> float:
@@ -79,9 +67,34 @@ def wrap_360(angle_deg: float) -> float:
     return 0.0 if a >= 360.0 else a
 
 
+def initial_azimuth(lat1: float, lon1: float, lat2: float, lon2: float) -> float:
+    """Azimuth [deg from north, clockwise, in [0, 360)] at the first point of the geodesic to the second.
+
+    Parameters
+    ----------
+    lat1, lon1 : float
+        The first point [deg, WGS-84].
+    lat2, lon2 : float
+        The second point [deg, WGS-84].
+
+    Returns
+    -------
+    float
+        The geodesic's azimuth at the first point (Karney 2013).
+
+    Examples
+    --------
+    >>> round(initial_azimuth(0.0, 0.0, 0.0, 1.0), 9), round(initial_azimuth(58.0, 10.0, 57.0, 10.0), 9)
+    (90.0, 180.0)
+    """
+    return wrap_360(WGS84.Inverse(lat1, lon1, lat2, lon2, Geodesic.AZIMUTH)["azi1"])
+
+
 @dataclass(frozen=True)
 class LocalPlane:
-    """Local tangent plane (x north, y east, metres) at the reference ``lat``, ``lon`` [deg] on WGS-84.
+    """Local plane (x north, y east, metres): the azimuthal equidistant projection about ``lat``, ``lon``.
+
+    Points farther than ``max_range`` from the reference (geodesic distance) are refused, in either direction.
 
     Parameters
     ----------
@@ -89,6 +102,8 @@ class LocalPlane:
         Latitude of the reference point (the plane's origin) [deg, WGS-84, north positive], in [-90, 90].
     lon : float
         Longitude of the reference point [deg, WGS-84, east positive], in [-180, 180].
+    max_range : float, optional
+        Largest accepted distance from the reference [m]; default :data:`MAX_RANGE`.
 
     Examples
     --------
@@ -97,17 +112,44 @@ class LocalPlane:
     (0.0, 0.0)
     >>> x, y = plane.to_plane(58.70, 10.80)
     >>> lat, lon = plane.to_geodetic(x, y)
-    >>> abs(lat - 58.70) < 1e-9 and abs(lon - 10.80) < 1e-9
+    >>> abs(lat - 58.70) < 1e-12 and abs(lon - 10.80) < 1e-12
     True
+    >>> plane.to_plane(-58.0, 20.0, field="targetShips[0].initial.position")
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.ScenarioError: targetShips[0].initial.position: expected a position within 60 km (geodesic distance) of the reference 58.61, 10.59, got '-58.0, 20.0 (12957.2 km away)'
     """
 
     lat: float
     lon: float
+    max_range: float = MAX_RANGE
 
-    def _frame(self):
-        return _ecef(self.lat, self.lon), _neu(self.lat, self.lon)
+    def _refuse(self, field: str, what: str, distance: float):
+        raise ScenarioError(field, f"a position within {self.max_range / 1000:g} km (geodesic distance) of the "
+                            f"reference {self.lat!r}, {self.lon!r}", f"{what} ({distance / 1000:.1f} km away)")
 
-    def to_plane(self, lat: float, lon: float) -> tuple[float, float]:
+    def _inverse(self, lat: float, lon: float, field: str) -> dict:
+        g = WGS84.Inverse(self.lat, self.lon, lat, lon, _INVERSE)
+        if not g["s12"] <= self.max_range + _SLACK:
+            self._refuse(field, f"{lat!r}, {lon!r}", g["s12"])
+        return g
+
+    def distance(self, lat: float, lon: float) -> float:
+        """Geodesic distance [m] of (lat, lon) from the reference.
+
+        Parameters
+        ----------
+        lat, lon : float
+            The point [deg, WGS-84].
+
+        Returns
+        -------
+        float
+            The distance along the geodesic (Karney 2013).
+        """
+        return WGS84.Inverse(self.lat, self.lon, lat, lon, Geodesic.DISTANCE)["s12"]
+
+    def to_plane(self, lat: float, lon: float, *, field: str = "position") -> tuple[float, float]:
         """(x north, y east) [m] of a point on the ellipsoid.
 
         Parameters
@@ -116,20 +158,28 @@ class LocalPlane:
             Latitude of the point [deg, WGS-84].
         lon : float
             Longitude of the point [deg, WGS-84].
+        field : str, optional
+            The point's name in the error raised beyond ``max_range``.
 
         Returns
         -------
         (float, float)
-            The point's projection on the plane: metres north and east of the reference.
+            The point on the plane: its geodesic distance from the reference times the cosine and the sine of
+            the geodesic's azimuth at the reference.
+
+        Raises
+        ------
+        ScenarioError
+            If the point lies farther than ``max_range`` from the reference.
         """
-        origin, neu = self._frame()
-        d = neu @ (_ecef(lat, lon) - origin)
-        return float(d[0]), float(d[1])
+        g = self._inverse(lat, lon, field)
+        if g["s12"] == 0.0:
+            return 0.0, 0.0
+        a = math.radians(g["azi1"])
+        return g["s12"] * math.cos(a), g["s12"] * math.sin(a)
 
-    def to_geodetic(self, x: float, y: float) -> tuple[float, float]:
-        """(lat, lon) [deg] of the point on the ellipsoid whose projection on the plane is (x, y).
-
-        The inverse of :meth:`to_plane` (to < 1 mm; a fixed-point iteration over the height above the plane).
+    def to_geodetic(self, x: float, y: float, *, field: str = "point") -> tuple[float, float]:
+        """(lat, lon) [deg] of the point whose image on the plane is (x, y): the inverse of :meth:`to_plane`.
 
         Parameters
         ----------
@@ -137,23 +187,34 @@ class LocalPlane:
             Metres north of the reference, in the plane.
         y : float
             Metres east of the reference, in the plane.
+        field : str, optional
+            The point's name in the error raised beyond ``max_range``.
 
         Returns
         -------
         (float, float)
-            Latitude and longitude [deg, WGS-84].
-        """
-        origin, neu = self._frame()
-        up = 0.0
-        for _ in range(20):
-            lat, lon, _h = _geodetic(origin + neu.T @ np.array([x, y, up]))
-            d = neu @ (_ecef(lat, lon) - origin)
-            if abs(d[2] - up) < 1e-7:
-                break
-            up = float(d[2])
-        return lat, lon
+            Latitude and longitude [deg, WGS-84], longitude in [-180, 180].
 
-    def course_to_plane(self, course_deg: float, lat: float, lon: float) -> float:
+        Raises
+        ------
+        ScenarioError
+            If ``hypot(x, y)`` exceeds ``max_range``.
+        """
+        s = math.hypot(x, y)
+        if not s <= self.max_range + _SLACK:
+            self._refuse(field, f"x = {x:.1f} m, y = {y:.1f} m", s)
+        g = WGS84.Direct(self.lat, self.lon, math.degrees(math.atan2(y, x)), s, Geodesic.LATITUDE | Geodesic.LONGITUDE)
+        return g["lat2"], g["lon2"]
+
+    def _frame(self, lat: float, lon: float, field: str) -> tuple[float, float, float]:
+        """(a1, a2, s/m) at a point: azimuths at the reference and at the point [deg], the across-track scale."""
+        g = self._inverse(lat, lon, field)
+        # s/m - 1 is about K s^2 / 6 (K the Gaussian curvature): 4e-15 at 1 m, below which the ratio of the two
+        # rounded lengths would be noise (a point 1e-9 m away gives 1.0024)
+        scale = g["s12"] / g["m12"] if g["s12"] > _UNIT_SCALE_BELOW else 1.0
+        return g["azi1"], g["azi2"], scale
+
+    def course_to_plane(self, course_deg: float, lat: float, lon: float, *, field: str = "position") -> float:
         """A course [deg from local north, clockwise] at (lat, lon) as an angle in the plane [deg from x to y].
 
         Parameters
@@ -164,19 +225,20 @@ class LocalPlane:
             Latitude of the ship [deg, WGS-84].
         lon : float
             Longitude of the ship [deg, WGS-84].
+        field : str, optional
+            The position's name in the error raised beyond ``max_range``.
 
         Returns
         -------
         float
             The direction in the plane [deg from x (north of the reference) towards y (east)], in [0, 360).
         """
-        c = math.radians(course_deg)
-        local = _neu(lat, lon)
-        v = _neu(self.lat, self.lon) @ (math.cos(c) * local[0] + math.sin(c) * local[1])
-        return wrap_360(math.degrees(math.atan2(v[1], v[0])))
+        a1, a2, scale = self._frame(lat, lon, field)
+        c = math.radians(course_deg - a2)
+        return wrap_360(a1 + math.degrees(math.atan2(math.sin(c) * scale, math.cos(c))))
 
-    def course_from_plane(self, angle_deg: float, lat: float, lon: float) -> float:
-        """The inverse of :meth:`course_to_plane` (to ~(d/R)² rad): a plane angle as a course at (lat, lon).
+    def course_from_plane(self, angle_deg: float, lat: float, lon: float, *, field: str = "position") -> float:
+        """The inverse of :meth:`course_to_plane`: a plane angle as a course at (lat, lon).
 
         Parameters
         ----------
@@ -186,13 +248,14 @@ class LocalPlane:
             Latitude of the ship [deg, WGS-84].
         lon : float
             Longitude of the ship [deg, WGS-84].
+        field : str, optional
+            The position's name in the error raised beyond ``max_range``.
 
         Returns
         -------
         float
             The course [deg from the local north at (lat, lon), clockwise], in [0, 360).
         """
-        a = math.radians(angle_deg)
-        ref = _neu(self.lat, self.lon)
-        v = _neu(lat, lon) @ (math.cos(a) * ref[0] + math.sin(a) * ref[1])
-        return wrap_360(math.degrees(math.atan2(v[1], v[0])))
+        a1, a2, scale = self._frame(lat, lon, field)
+        t = math.radians(angle_deg - a1)
+        return wrap_360(a2 + math.degrees(math.atan2(math.sin(t) / scale, math.cos(t))))

@@ -5,6 +5,10 @@ writes the scenario after a comment recording the plane's reference and the leng
 (:func:`scenario_header`); TOML → JSON reads that comment back (:func:`read_header`) and writes the situation
 with :func:`~mmg_casadi.scenarios.maritime_export.dump_traffic_situation`. :func:`convert_file` is the
 ``mmg-casadi convert`` command.
+
+What the situation holds comes back: positions (the plane's map and its inverse agree to nanometres, see
+:mod:`mmg_casadi.scenarios.geodesy`), courses, speeds, and each ship's static data, kept in the scenario file as
+``length_m``, ``beam_m`` and a ``[ships.metadata]`` table (:class:`~mmg_casadi.scenarios.scenario.ShipSpec`).
 """
 
 from __future__ import annotations
@@ -46,7 +50,7 @@ def scenario_header(plane: LocalPlane, unit_m: float) -> str:
     (58.5, 10.25, 230.0)
     """
     return (f"# maritime-schema reference: lat = {plane.lat!r}, lon = {plane.lon!r}, length = {unit_m!r} m\n"
-            "# (x north, y east in the local tangent plane at this point; lengths in ship lengths)\n")
+            "# (x north, y east in the azimuthal equidistant plane about this point; lengths in ship lengths)\n")
 
 
 def read_header(text: str):

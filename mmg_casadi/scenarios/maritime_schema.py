@@ -4,21 +4,35 @@ Schema: ``TrafficSituation`` version 0.2.0 of dnv-opensource/maritime-schema, ``
 (commit 14d9ad70772a055687b5664ef31aa4b7233c580d; MIT). A situation has an ``ownShip`` and ``targetShips``;
 each ship has ``static`` (``id``, ``name``, ``dimensions.length`` in m), ``initial`` (``position.lat`` /
 ``position.lon`` in WGS-84 degrees, ``sog`` in knots, ``cog`` and ``heading`` in degrees from north,
-clockwise) and ``waypoints`` (``position``, optional ``leg.sog`` / ``leg.data.sog.value`` in knots). The
+clockwise) and ``waypoints`` (``position``, optional ``leg.sog`` / ``leg.data.sog.value`` in knots: the speed
+on the leg to that waypoint, read into the ship's ``speeds``; a route without a leg speed different from the
+initial one keeps the initial speed on every leg). The
 older field names of the schema's first releases and of DNV's ship-traffic-generator output
 (``position.latitude`` / ``position.longitude``, ``static.length``; dnv-opensource/maritime-schema
 ``schema/caga/input_schema.json``, commit 0d76daf3ac5cd138f093d23795bbcd46c819a597) are read as well.
 Writing a scenario as a traffic situation is :mod:`mmg_casadi.scenarios.maritime_export`; converting files
 either way is :mod:`mmg_casadi.scenarios.interchange`.
 
-Geometry. Positions are mapped to the local tangent plane (x north, y east, metres) of
-:class:`~mmg_casadi.scenarios.geodesy.LocalPlane` (see :mod:`mmg_casadi.scenarios.geodesy`); reading, the
-reference is the own ship's initial position. Courses and headings, given against the local north of each ship,
-are turned into the plane by :meth:`~mmg_casadi.scenarios.geodesy.LocalPlane.course_to_plane`. Metres become
-ship lengths of the KCS (L = 230 m) or, with ``length_scale="own-ship"``,
-of the own ship (``ownShip.static.dimensions.length``; speeds then Froude-scaled to that length). Speeds in
-knots become fractions of the design speed (24 kn for the KCS); outside the model's range
-:data:`~mmg_casadi.scenarios.scenario.SPEED_RANGE` a :class:`~mmg_casadi.errors.ScenarioError` names the field.
+Geometry. Positions are mapped to the plane (x north, y east, metres) of
+:class:`~mmg_casadi.scenarios.geodesy.LocalPlane`, the azimuthal equidistant projection about the own ship's
+initial position computed with Karney's geodesics (see :mod:`mmg_casadi.scenarios.geodesy`). Every position
+(initial and waypoints) must lie within :data:`~mmg_casadi.scenarios.geodesy.MAX_RANGE` (60 km) of it, where
+the plane keeps distances to < 1 m; a position beyond raises a :class:`~mmg_casadi.errors.ScenarioError` naming
+it (``targetShips[0].initial.position``, ``ownShip.waypoints[2].position``). Courses and headings, given
+against the local north of each ship, are turned into the plane by
+:meth:`~mmg_casadi.scenarios.geodesy.LocalPlane.course_to_plane`. Metres become ship lengths of the KCS
+(L = 230 m) or, with ``length_scale="own-ship"``, of the own ship (``ownShip.static.dimensions.length``; speeds
+then Froude-scaled to that length). Speeds in knots become fractions of the design speed (24 kn for the KCS);
+outside the model's range :data:`~mmg_casadi.scenarios.scenario.SPEED_RANGE` a
+:class:`~mmg_casadi.errors.ScenarioError` names the field.
+
+Static data. Each ship's ``static`` object is kept in its :class:`~mmg_casadi.scenarios.scenario.ShipSpec`: the
+length and width (m) become ``length_m`` and ``beam_m`` (data: every ship is simulated as the hull of length L),
+everything else (``id``, ``mmsi``, ``imo``, ``shipType``, ``sogMax``, ``dimensions.height``, any other key)
+``metadata``, under the names of schema 0.2.0: the flat ``length``, ``width``, ``height`` of the older files go
+to ``dimensions`` and trafficgen's ``speedMax`` (maximum speed in knots) to ``sogMax``, its name in 0.2.0.
+``name`` becomes the ship's name (kept in ``metadata`` only when the scenario's name differs: a blank, repeated
+or padded name); keys whose value is null are left out.
 
 Ships. The own ship uses ``method`` (the scenario's ``settings.method``); target ships use ``target_method``
 (``"none"``: they track their own waypoints, or hold their course, without avoiding anyone). Waypoints within
@@ -40,8 +54,8 @@ import numpy as np
 from mmg_casadi.errors import ScenarioError
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
 from mmg_casadi.guidance.methods import NAMES as METHODS
-from mmg_casadi.scenarios.geodesy import LocalPlane, wrap_360
-from mmg_casadi.scenarios.scenario import SPEED_RANGE, Scenario, scenario_from_dict
+from mmg_casadi.scenarios.geodesy import LocalPlane, initial_azimuth
+from mmg_casadi.scenarios.scenario import SPEED_RANGE, Scenario, check_metadata, scenario_from_dict
 from mmg_casadi.vessel.ship import load_kcs
 
 KNOT = 1852.0 / 3600.0
@@ -53,6 +67,9 @@ EXTEND_PAST = 30.0
 T_MAX_MARGIN = 1.5
 """``t_max`` of a converted scenario: this factor times the longest sailing time of any ship, at least 300."""
 LENGTH_SCALES = ("kcs", "own-ship")
+RENAMED = {"length": ("dimensions", "length"), "width": ("dimensions", "width"), "height": ("dimensions", "height"),
+           "speedMax": (None, "sogMax")}
+"""Static fields of the older files (flat keys) and trafficgen's ``speedMax``: their place in schema 0.2.0."""
 
 
 def _get(d: dict, path: str, *names, required=True):
@@ -112,6 +129,16 @@ def _position(d, field: str) -> tuple[float, float]:
     return lat, lon
 
 
+def _leg_speed(sog_kn: float, u_des: float, field: str) -> float:
+    """A leg's speed over ground (kn) as a fraction of the design speed, within the scenario's speed range."""
+    lo, hi = SPEED_RANGE
+    speed = sog_kn * KNOT / u_des
+    if not lo <= speed <= hi:
+        raise ScenarioError(field, f"a speed in [{lo * u_des / KNOT:.2f}, {hi * u_des / KNOT:.2f}] kn "
+                            f"([{lo:g}, {hi:g}] x the design speed {u_des / KNOT:.2f} kn)", sog_kn)
+    return speed
+
+
 def _leg_sog(wp: dict, field: str):
     leg = wp.get("leg") if isinstance(wp, dict) else None
     if not isinstance(leg, dict):
@@ -127,14 +154,47 @@ def _leg_sog(wp: dict, field: str):
 @dataclass
 class _Ship:
     name: str
+    raw_name: object  # static.name as given (None if absent)
     lat: float
     lon: float
     sog_kn: float
     cog: float
     heading: float
     waypoints: list  # [(lat, lon)]
+    leg_sog_kn: list  # per waypoint: speed on the leg to it (kn), None where not given
     length_m: float | None
+    beam_m: float | None
+    metadata: dict
     field: str
+    start_field: str  # the field of the start position (initial.position, else waypoints[0].position)
+
+
+def _static(static: dict, field: str):
+    """(name, length_m, beam_m, metadata) of a ship's ``static`` object (see the module docstring)."""
+    where = f"{field}.static"
+    static = {k: v for k, v in static.items() if v is not None}
+    dims = static.pop("dimensions", {})
+    if not isinstance(dims, dict):
+        raise ScenarioError(f"{where}.dimensions", "an object (length, width, height, ... in m)", dims)
+    dims = {k: v for k, v in dims.items() if v is not None}
+    source = {"length": f"{where}.dimensions.length", "width": f"{where}.dimensions.width"}
+    for old, (table, new) in RENAMED.items():
+        if old not in static:
+            continue
+        target = dims if table == "dimensions" else static
+        if new in target:
+            continue  # both names given: the 0.2.0 one counts, the old one is kept as it is
+        target[new] = static.pop(old)
+        if new in source:
+            source[new] = f"{where}.{old}"
+    size = [check_number(dims.pop(k), source[k], 1e-3, None, "m") if k in dims else None
+            for k in ("length", "width")]
+    name = static.pop("name", None)
+    if name is not None:
+        check_metadata({"name": name}, where)
+    if dims:
+        static["dimensions"] = dims
+    return name, size[0], size[1], check_metadata(static, where, drop_nulls=True)
 
 
 def _ship(d, field: str, index: int) -> _Ship:
@@ -143,12 +203,11 @@ def _ship(d, field: str, index: int) -> _Ship:
     static = _get(d, field, "static", required=False) or {}
     if not isinstance(static, dict):
         raise ScenarioError(f"{field}.static", "an object", static)
-    name = static.get("name")
+    raw_name, length_m, beam_m, metadata = _static(static, field)
+    name = raw_name
     if not isinstance(name, str) or not name.strip():
-        name = f"ship{index}" if "id" not in static else f"ship{static['id']}"
-    dims = static.get("dimensions")
-    length = dims.get("length") if isinstance(dims, dict) else static.get("length")
-    length_m = None if length is None else check_number(length, f"{field}.static.dimensions.length", 1e-3, None, "m")
+        ident = metadata.get("id")
+        name = f"ship{index}" if ident is None or isinstance(ident, (dict, list)) else f"ship{ident}"
     wps = _get(d, field, "waypoints", required=False) or []
     if not isinstance(wps, list):
         raise ScenarioError(f"{field}.waypoints", "an array of waypoints", wps)
@@ -159,20 +218,22 @@ def _ship(d, field: str, index: int) -> _Ship:
             raise ScenarioError(f"{field}.initial", "an initial state (required unless the ship has at least "
                                 "two waypoints)")
         lat, lon = waypoints[0]
-        plane = LocalPlane(lat, lon)
-        x, y = plane.to_plane(*waypoints[1])
-        cog = wrap_360(math.degrees(math.atan2(y, x)))
+        start_field = f"{field}.waypoints[0].position"
+        cog = initial_azimuth(lat, lon, *waypoints[1])
         heading = cog
         sog = _leg_sog(wps[1], f"{field}.waypoints[1]")
         if sog is None:
             raise ScenarioError(f"{field}.waypoints[1].leg.sog", "a speed in knots (no initial state given)")
     else:
         lat, lon = _position(initial, f"{field}.initial")
+        start_field = f"{field}.initial.position"
         sog = check_number(_get(initial, f"{field}.initial", "sog"), f"{field}.initial.sog", 0.0, None, "kn")
         cog = check_number(_get(initial, f"{field}.initial", "cog"), f"{field}.initial.cog", 0.0, 360.0, "deg")
         h = _get(initial, f"{field}.initial", "heading", required=False)
         heading = cog if h is None else check_number(h, f"{field}.initial.heading", 0.0, 360.0, "deg")
-    return _Ship(name.strip(), lat, lon, sog, cog, heading, waypoints, length_m, field)
+    legs = [_leg_sog(w, f"{field}.waypoints[{j}]") for j, w in enumerate(wps)]
+    return _Ship(name.strip(), raw_name, lat, lon, sog, cog, heading, waypoints, legs, length_m, beam_m, metadata,
+                 field, start_field)
 
 
 def _last_cpa_time(starts, velocities) -> float:
@@ -240,6 +301,10 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
     48.4
     >>> sc.method_of(0), sc.method_of(1), sc.ships[0].waypoints[-1][0] > 24.2 + 30
     ('modified-vortex', 'none', True)
+    >>> sit["targetShips"][0]["static"].update(dimensions={"length": 50.0, "width": 10.0}, mmsi=257000123)
+    >>> t = traffic_situation_to_scenario(sit)[0].ships[1]
+    >>> t.length_m, t.beam_m, t.metadata
+    (50.0, 10.0, {'id': 2, 'mmsi': 257000123})
     """
     for name, value in (("method", method), ("target_method", target_method)):
         if value not in METHODS:
@@ -276,21 +341,27 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
                 raise ScenarioError(f"{s.field}.initial.sog", f"a speed in [{lo * u_des / KNOT:.2f}, "
                                     f"{hi * u_des / KNOT:.2f}] kn ([{lo:g}, {hi:g}] x the design speed "
                                     f"{u_des / KNOT:.2f} kn)", s.sog_kn)
-            x, y = plane.to_plane(s.lat, s.lon)
+            x, y = plane.to_plane(s.lat, s.lon, field=s.start_field)
             start = (x / unit, y / unit)
-            heading = plane.course_to_plane(s.heading, s.lat, s.lon)
-            course = plane.course_to_plane(s.cog, s.lat, s.lon)
-            path = []
-            for lat, lon in s.waypoints:
-                px, py = plane.to_plane(lat, lon)
+            heading = plane.course_to_plane(s.heading, s.lat, s.lon, field=s.start_field)
+            course = plane.course_to_plane(s.cog, s.lat, s.lon, field=s.start_field)
+            path, legs = [], []
+            for j, (lat, lon) in enumerate(s.waypoints):
+                px, py = plane.to_plane(lat, lon, field=f"{s.field}.waypoints[{j}].position")
                 p = (px / unit, py / unit)
                 if not path and math.dist(p, start) < START_TOLERANCE:
                     continue
                 path.append(p)
+                legs.append(speed if s.leg_sog_kn[j] is None else
+                            _leg_speed(s.leg_sog_kn[j], u_des, f"{s.field}.waypoints[{j}].leg.sog"))
             name = s.name if s.name not in names else f"{s.name} ({len(rows)})"
             names[name] = len(rows)
+            metadata = dict(s.metadata)
+            if s.raw_name is not None and s.raw_name != name:
+                metadata["name"] = s.raw_name  # the name as read, when the scenario's differs
             rows.append({"name": name, "start": start, "heading": heading, "course": course, "speed": speed,
-                         "path": path})
+                         "path": path, "legs": legs, "metadata": metadata, "length_m": s.length_m,
+                         "beam_m": s.beam_m})
         starts = [np.asarray(r["start"]) for r in rows]
         vel = [r["speed"] * np.array([math.cos(math.radians(r["course"])), math.sin(math.radians(r["course"]))])
                for r in rows]
@@ -304,8 +375,14 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
             t_sail = max(t_sail, sum(math.dist(a, b) for a, b in zip(pts[:-1], pts[1:])) / r["speed"])
             ship = {"name": r["name"], "start": list(r["start"]), "heading": r["heading"], "speed": r["speed"],
                     "waypoints": [list(p) for p in path]}
+            legs = r["legs"] + [r["legs"][-1] if r["legs"] else r["speed"]] * (len(path) - len(r["legs"]))
+            if any(v != r["speed"] for v in legs):  # a route with speeds; otherwise every leg at the initial speed
+                ship["speeds"] = legs
             if i > 0:
                 ship["method"] = target_method
+            ship.update({k: r[k] for k in ("length_m", "beam_m") if r[k] is not None})
+            if r["metadata"]:
+                ship["metadata"] = r["metadata"]
             out_ships.append(ship)
         t_max = min(10000.0, max(300.0, math.ceil(T_MAX_MARGIN * t_sail)))
         sc = scenario_from_dict({"settings": {"method": method, "t_max": t_max}, "ships": out_ships},
