@@ -1,9 +1,12 @@
-"""3-DOF MMG manoeuvring model of the KCS in the prime-II system, as CasADi expressions.
+"""3-DOF MMG manoeuvring model in the prime-II system, as CasADi expressions, for every hull of the library.
 
 State ``x = [u, v, r, x, y, psi, delta]`` (velocities over U_des, yaw rate in U_des/L, positions in L, angles in
-rad); inputs: commanded rudder ``delta_c`` (rad) and propeller speed ``n_rpm`` (rev/min). The force model is the
-laboratory's form spelled out in the header of ``data/kcs_mmg.toml`` (drift-angle hull polynomial, design-speed
-scaling, constant wake), not the Yasukawa–Yoshimura 2015 standard form.
+rad); inputs: commanded rudder ``delta_c`` (rad) and propeller speed ``n_rpm`` (rev/min). The force model follows
+the ship's ``hull_form``: ``'beta'`` is the laboratory's form spelled out in the header of ``data/kcs_mmg.toml``
+(drift-angle hull polynomial, design-speed scaling, constant wake; the KCS), ``'yy2015'`` the standard form of
+Yasukawa & Yoshimura (2015) spelled out in the header of ``data/kvlcc2_mmg.toml`` (the KVLCC2). Both share the
+equations of motion: the ``'yy2015'`` hull forces returned here include the added-mass Coriolis terms
+``m_y' v' r'`` and ``-m_x' u' r'``, as the ``'beta'`` coefficients fold them in.
 
 With a disturbance input ``env = [V_c, beta_c, U_w, psi_w]`` (:mod:`mmg_casadi.vessel.environment`) the state's
 ``u, v`` are velocities RELATIVE TO THE WATER; the position kinematics add the current and the wind load is added
@@ -45,11 +48,38 @@ def mass_matrix(ship: ShipParams) -> np.ndarray:
     ])
 
 
-def propeller_terms(ship: ShipParams, u, n_rpm):
+def _yy_kinematics(u, v, r):
+    """Speed U', drift angle β and yaw rate r'' = r'/U' of the ``'yy2015'`` form (U' guarded away from 0)."""
+    U = ca.sqrt(u**2 + v**2 + 1e-12)
+    return U, ca.atan2(-v, u), r / U
+
+
+def wake_factor(ship: ShipParams, u, v, r):
+    """``1 - w_P`` at the propeller.
+
+    ``'beta'``: constant. ``'yy2015'``: ``(1 - w_P0)(1 + (1 - exp(-C1|β_P|))(C2 - 1))`` with
+    ``β_P = β - x_P' r''`` and C2 = ``C2_pos`` for β_P > 0, ``C2_neg`` otherwise (Yasukawa & Yoshimura 2015).
+
+    Parameters
+    ----------
+    ship : ShipParams
+        Ship parameters.
+    u, v, r : float or casadi.SX or casadi.MX
+        Non-dimensional surge, sway velocity and yaw rate (units of U_des, U_des/L).
+    """
+    if ship.hull_form != "yy2015":
+        return 1.0 - ship.wP
+    _, b, rr = _yy_kinematics(u, v, r)
+    beta_P = b - ship.xP * rr
+    C2 = ca.if_else(beta_P > 0, ship.C2_pos, ship.C2_neg)
+    return (1.0 - ship.wP) * (1.0 + (1.0 - ca.exp(-ship.C1 * ca.fabs(beta_P))) * (C2 - 1.0))
+
+
+def propeller_terms(ship: ShipParams, u, n_rpm, v=0.0, r=0.0):
     """Advance ratio J, thrust coefficient K_T and non-dimensional propeller thrust X_P'.
 
     ``J = u' U_des (1 - w_P)/(n D_P)``, ``K_T = k0 + k1 J + k2 J²``, ``X_P = (1 - t_P) ρ K_T n² D_P⁴`` over
-    ½ρU_des²Ld.
+    ½ρU_des²Ld; the wake is :func:`wake_factor`.
 
     Parameters
     ----------
@@ -59,16 +89,19 @@ def propeller_terms(ship: ShipParams, u, n_rpm):
         Non-dimensional surge velocity u' (units of U_des).
     n_rpm : float or casadi.SX or casadi.MX
         Propeller speed (rev/min).
+    v, r : float or casadi.SX or casadi.MX, optional
+        Sway velocity and yaw rate (the ``'yy2015'`` wake depends on them; straight running if omitted).
     """
     n = n_rpm / 60.0
-    J = u * ship.U_design * (1.0 - ship.wP) / (n * ship.DP)
+    J = u * ship.U_design * wake_factor(ship, u, v, r) / (n * ship.DP)
     KT = ship.k0 + ship.k1 * J + ship.k2 * J**2
     XP = (1.0 - ship.tP) * KT * n**2 * ship.DP**4 / (0.5 * ship.L * ship.d * ship.U_design**2)
     return J, KT, XP
 
 
 def hull_forces(ship: ShipParams, u, v, r):
-    """Hull forces X_H', Y_H', N_H' as polynomials in the drift angle β = atan2(-v', u') and r'.
+    """Hull forces X_H', Y_H', N_H' as polynomials in the drift angle β = atan2(-v', u') and r' (``'beta'``), or
+    in v/U and rL/U times U² with the added-mass Coriolis terms (``'yy2015'``, see :func:`_hull_forces_yy`).
 
     Parameters
     ----------
@@ -81,6 +114,8 @@ def hull_forces(ship: ShipParams, u, v, r):
     r : float or casadi.SX or casadi.MX
         Non-dimensional yaw rate r' (rad per unit time L/U).
     """
+    if ship.hull_form == "yy2015":
+        return _hull_forces_yy(ship, u, v, r)
     b = ca.atan2(-v, u)
     XH = ship.X0 * u**2 + ship.Xbb * b**2 + ship.Xbr_minus_my * b * r + ship.Xrr * r**2 + ship.Xbbbb * b**4
     YH = (ship.Yb * b + ship.Yr_minus_mx * r + ship.Ybbb * b**3 + ship.Ybbr * b**2 * r + ship.Ybrr * b * r**2
@@ -90,11 +125,38 @@ def hull_forces(ship: ShipParams, u, v, r):
     return XH, YH, NH
 
 
+def _hull_forces_yy(ship: ShipParams, u, v, r):
+    """Hull forces of the ``'yy2015'`` form in design-speed prime units, added-mass Coriolis terms included.
+
+    With U' = √(u'² + v'²), Yasukawa & Yoshimura's ``X_H = ½ρLdU² X_H'(v/U, rL/U)`` becomes
+    ``X_H' = -R_0' U'² + X_vv' v'² + X_vr' v' r' + X_rr' r'² + X_vvvv' v'⁴/U'²`` and
+    ``Y_H' = (Y_v' v' + Y_r' r') U' + (Y_vvv' v'³ + Y_vvr' v'² r' + Y_vrr' v' r'² + Y_rrr' r'³)/U'`` (N_H' alike).
+    """
+    U, _, _ = _yy_kinematics(u, v, r)
+    XH = (-ship.R0 * U**2 + ship.Xvv * v**2 + ship.Xvr * v * r + ship.Xrr * r**2 + ship.Xvvvv * v**4 / U**2
+          + ship.my * v * r)
+    YH = ((ship.Yv * v + ship.Yr * r) * U + (ship.Yvvv * v**3 + ship.Yvvr * v**2 * r + ship.Yvrr * v * r**2
+                                             + ship.Yrrr * r**3) / U - ship.mx * u * r)
+    NH = ((ship.Nv * v + ship.Nr * r) * U + (ship.Nvvv * v**3 + ship.Nvvr * v**2 * r + ship.Nvrr * v * r**2
+                                             + ship.Nrrr * r**3) / U)
+    return XH, YH, NH
+
+
+def _rudder_inflow_yy(ship: ShipParams, u, v, r, uR):
+    """Lateral rudder inflow v_R' = U' γ_R β_R, β_R = β - l_R' r'', γ_R switched on β_R (Yasukawa & Yoshimura)."""
+    U, b, rr = _yy_kinematics(u, v, r)
+    beta_R = b - ship.lR * rr
+    gammaR = ca.if_else(beta_R > 0, ship.gammaR_pos, ship.gammaR_neg)
+    vR = U * gammaR * beta_R
+    return vR, ca.atan2(vR, uR)
+
+
 def rudder_forces(ship: ShipParams, u, v, r, delta, n_rpm):
     """Rudder forces X_R', Y_R', N_R' and the rudder inflow (u_R', v_R', α_R).
 
     The propeller-slipstream factor is written as ``u'(1 + κ(√(1 + 8K_T/(πJ²)) - 1))
-    = u'(1 - κ) + κ √(u'² + 8K_T (u'/J)²/π)`` so that it stays finite at u' = 0.
+    = u'(1 - κ) + κ √(u'² + 8K_T (u'/J)²/π)`` so that it stays finite at u' = 0. The lateral inflow ``v_R'`` is
+    ``γ_R (v' + l_R' r')`` for ``'beta'`` and Yasukawa & Yoshimura's ``U' γ_R β_R`` (opposite sign) for ``'yy2015'``.
 
     Parameters
     ----------
@@ -111,16 +173,21 @@ def rudder_forces(ship: ShipParams, u, v, r, delta, n_rpm):
     n_rpm : float or casadi.SX or casadi.MX
         Propeller speed (rev/min).
     """
-    J, KT, _ = propeller_terms(ship, u, n_rpm)
-    u_over_J = (n_rpm / 60.0) * ship.DP / (ship.U_design * (1.0 - ship.wP))
+    J, KT, _ = propeller_terms(ship, u, n_rpm, v, r)
+    one_minus_w = wake_factor(ship, u, v, r)
+    u_over_J = (n_rpm / 60.0) * ship.DP / (ship.U_design * one_minus_w)
     slip = u * (1.0 - ship.kappa) + ship.kappa * ca.sqrt(u**2 + 8.0 * ca.fmax(KT, 0.0) * u_over_J**2 / math.pi)
-    uR = ship.epsilon * (1.0 - ship.wP) * ca.sqrt(ship.eta * slip**2 + (1.0 - ship.eta) * u**2)
-    b = ca.atan2(-v, u)
-    beta_P = b - ship.xP * r
-    gammaR = ca.if_else(beta_P > 0, ship.gammaR_pos, ship.gammaR_neg)  # flow straightening, port/starboard asymmetric
-    vR = gammaR * (v + ship.lR * r)
+    uR = ship.epsilon * one_minus_w * ca.sqrt(ship.eta * slip**2 + (1.0 - ship.eta) * u**2)
+    if ship.hull_form == "yy2015":
+        vR, inflow = _rudder_inflow_yy(ship, u, v, r, uR)
+    else:
+        b = ca.atan2(-v, u)
+        beta_P = b - ship.xP * r
+        gammaR = ca.if_else(beta_P > 0, ship.gammaR_pos, ship.gammaR_neg)  # flow straightening, asymmetric
+        vR = gammaR * (v + ship.lR * r)
+        inflow = ca.atan2(-vR, uR)
     UR2 = uR**2 + vR**2
-    alphaR = delta - ca.atan2(-vR, uR)
+    alphaR = delta - inflow
     FN = ship.AR_over_Ld * ship.f_alpha * UR2 * ca.sin(alphaR)
     XR = -(1.0 - ship.tR) * FN * ca.sin(delta)
     YR = -(1.0 + ship.aH) * FN * ca.cos(delta)
@@ -156,7 +223,7 @@ def mmg_rhs(ship: ShipParams, steering: SteeringParams, x, delta_c, n_rpm, env=N
     """
     u, v, r, psi, delta = x[0], x[1], x[2], x[5], x[6]
     XH, YH, NH = hull_forces(ship, u, v, r)
-    _, _, XP = propeller_terms(ship, u, n_rpm)
+    _, _, XP = propeller_terms(ship, u, n_rpm, v, r)
     XR, YR, NR, _ = rudder_forces(ship, u, v, r, delta, n_rpm)
     m, xg = ship.m, ship.xG_nd
     X = XH + XP + XR + m * v * r + m * xg * r**2  # eq. (tau) + Coriolis terms of eq. (mmg_nd)

@@ -16,9 +16,13 @@ from pathlib import Path
 from mmg_casadi.errors import ParameterError
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ShipParams:
-    """Ship particulars and MMG coefficients of the laboratory's KCS model (see ``kcs_mmg.toml``).
+    """Ship particulars and MMG coefficients of one hull (see ``kcs_mmg.toml``, ``kvlcc2_mmg.toml``).
+
+    The coefficients with a default belong to one hull form only (``hull_form``): the drift-angle ones
+    (``X0`` ... ``Nbrr``) to ``'beta'``, the v-r ones (``R0`` ... ``C2_neg``) to ``'yy2015'``; the loader requires
+    every coefficient of the file's form.
 
     Dimensional particulars: ``L``, ``B``, ``d``, ``DP`` in m; ``U_design`` in m/s; ``rho`` in kg/m³;
     ``n_design_rpm`` in rev/min; ``xG`` in m. Everything else is non-dimensional (prime-II, design speed).
@@ -57,37 +61,37 @@ class ShipParams:
         Yaw added moment of inertia J_zz'.
     Izz : float
         Yaw moment of inertia I_zz'.
-    X0 : float
+    X0 : float, default 0
         Surge resistance coefficient X_0' (of u'²).
-    Xbb : float
+    Xbb : float, default 0
         Hull surge derivative X_ββ'.
-    Xbr_minus_my : float
+    Xbr_minus_my : float, default 0
         Hull surge derivative X_βr' − m_y'.
     Xrr : float
         Hull surge derivative X_rr'.
-    Xbbbb : float
+    Xbbbb : float, default 0
         Hull surge derivative X_ββββ'.
-    Yb : float
+    Yb : float, default 0
         Hull sway derivative Y_β'.
-    Yr_minus_mx : float
+    Yr_minus_mx : float, default 0
         Hull sway derivative Y_r' − m_x'.
-    Ybbb : float
+    Ybbb : float, default 0
         Hull sway derivative Y_βββ'.
-    Ybbr : float
+    Ybbr : float, default 0
         Hull sway derivative Y_ββr'.
-    Ybrr : float
+    Ybrr : float, default 0
         Hull sway derivative Y_βrr'.
     Yrrr : float
         Hull sway derivative Y_rrr'.
-    Nb : float
+    Nb : float, default 0
         Hull yaw-moment derivative N_β'.
     Nr : float
         Hull yaw-moment derivative N_r'.
-    Nbbb : float
+    Nbbb : float, default 0
         Hull yaw-moment derivative N_βββ'.
-    Nbbr : float
+    Nbbr : float, default 0
         Hull yaw-moment derivative N_ββr'.
-    Nbrr : float
+    Nbrr : float, default 0
         Hull yaw-moment derivative N_βrr'.
     Nrrr : float
         Hull yaw-moment derivative N_rrr'.
@@ -133,6 +137,23 @@ class ShipParams:
         Rudder-hull interaction factor a_H.
     xH : float
         Longitudinal position of the hull-induced rudder force x_H' (over L).
+    hull_form : str, default 'beta'
+        Force model of the hull: ``'beta'``, the laboratory's drift-angle polynomial with design-speed scaling
+        and constant wake (the KCS, ``kcs_mmg.toml``), or ``'yy2015'``, the standard form of Yasukawa &
+        Yoshimura (2015) in v' = v/U and r' = rL/U with U² scaling, a wake that depends on β_P and
+        flow straightening switched on β_R (the KVLCC2, ``kvlcc2_mmg.toml``).
+    R0 : float, default 0
+        ``'yy2015'``: straight-running resistance coefficient R_0' (X_H' = -R_0' + ...).
+    Xvv, Xvr, Xvvvv : float, default 0
+        ``'yy2015'``: hull surge derivatives X_vv', X_vr', X_vvvv' (X_rr' is ``Xrr``).
+    Yv, Yr, Yvvv, Yvvr, Yvrr : float, default 0
+        ``'yy2015'``: hull sway derivatives Y_v', Y_r', Y_vvv', Y_vvr', Y_vrr' (Y_rrr' is ``Yrrr``).
+    Nv, Nvvv, Nvvr, Nvrr : float, default 0
+        ``'yy2015'``: hull yaw-moment derivatives N_v', N_vvv', N_vvr', N_vrr' (N_r', N_rrr' are ``Nr``,
+        ``Nrrr``).
+    C1, C2_pos, C2_neg : float, default 0
+        ``'yy2015'``: wake-change coefficients, (1 - w_P)/(1 - w_P0) = 1 + (1 - exp(-C1|β_P|))(C2 - 1), C2 for
+        β_P > 0 and β_P < 0; ``wP`` is then w_P0, the wake in straight running.
     """
 
     L: float
@@ -151,22 +172,22 @@ class ShipParams:
     my: float
     Jzz: float
     Izz: float
-    X0: float
-    Xbb: float
-    Xbr_minus_my: float
+    X0: float = 0.0
+    Xbb: float = 0.0
+    Xbr_minus_my: float = 0.0
     Xrr: float
-    Xbbbb: float
-    Yb: float
-    Yr_minus_mx: float
-    Ybbb: float
-    Ybbr: float
-    Ybrr: float
+    Xbbbb: float = 0.0
+    Yb: float = 0.0
+    Yr_minus_mx: float = 0.0
+    Ybbb: float = 0.0
+    Ybbr: float = 0.0
+    Ybrr: float = 0.0
     Yrrr: float
-    Nb: float
+    Nb: float = 0.0
     Nr: float
-    Nbbb: float
-    Nbbr: float
-    Nbrr: float
+    Nbbb: float = 0.0
+    Nbbr: float = 0.0
+    Nbrr: float = 0.0
     Nrrr: float
     DP: float
     wP: float
@@ -189,6 +210,23 @@ class ShipParams:
     tR: float
     aH: float
     xH: float
+    hull_form: str = "beta"
+    R0: float = 0.0
+    Xvv: float = 0.0
+    Xvr: float = 0.0
+    Xvvvv: float = 0.0
+    Yv: float = 0.0
+    Yr: float = 0.0
+    Yvvv: float = 0.0
+    Yvvr: float = 0.0
+    Yvrr: float = 0.0
+    Nv: float = 0.0
+    Nvvv: float = 0.0
+    Nvvr: float = 0.0
+    Nvrr: float = 0.0
+    C1: float = 0.0
+    C2_pos: float = 0.0
+    C2_neg: float = 0.0
 
     @property
     def xG_nd(self) -> float:
@@ -259,15 +297,77 @@ def _read_toml(path: str | Path | None) -> dict:
 
 @lru_cache(maxsize=1)
 def _packaged_kcs() -> ShipParams:
-    return _ship_from(_read_toml(None))
+    return ship_from_table(_read_toml(None))
 
 
-def _ship_from(raw: dict) -> ShipParams:
+HULL_FORMS = ("beta", "yy2015")
+"""Hull force models of :class:`ShipParams` (``hull_form``)."""
+
+_FORM_ONLY = {
+    "beta": ("X0", "Xbb", "Xbr_minus_my", "Xbbbb", "Yb", "Yr_minus_mx", "Ybbb", "Ybbr", "Ybrr", "Nb", "Nbbb",
+             "Nbbr", "Nbrr"),
+    "yy2015": ("R0", "Xvv", "Xvr", "Xvvvv", "Yv", "Yr", "Yvvv", "Yvvr", "Yvrr", "Nv", "Nvvv", "Nvvr", "Nvrr",
+               "C1", "C2_pos", "C2_neg"),
+}
+
+
+def required_coefficients(hull_form: str) -> tuple[str, ...]:
+    """Names of :class:`ShipParams` a data file of ``hull_form`` must give.
+
+    Parameters
+    ----------
+    hull_form : str
+        One of :data:`HULL_FORMS`.
+
+    Examples
+    --------
+    >>> "R0" in required_coefficients("yy2015"), "R0" in required_coefficients("beta")
+    (True, False)
+    """
+    other = {n for form, names in _FORM_ONLY.items() if form != hull_form for n in names}
+    return tuple(f.name for f in fields(ShipParams) if f.name != "hull_form" and f.name not in other)
+
+
+def ship_from_table(raw: dict) -> ShipParams:
+    """:class:`ShipParams` from a parsed vessel data file (blocks ``model``, ``ship``, ``mass``, ``hull``,
+    ``propeller``, ``rudder``); every coefficient of the file's hull form is required.
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed TOML file.
+    """
+    model = raw.get("model", {})
+    form = model.get("hull_form", "beta") if isinstance(model, dict) else None
+    if not isinstance(form, str) or form not in HULL_FORMS:
+        raise ParameterError("model.hull_form", f"one of: {', '.join(HULL_FORMS)}", form)
     flat: dict = {}
     for block in ("ship", "mass", "hull", "propeller", "rudder"):
         flat.update(raw[block])
-    names = {f.name for f in fields(ShipParams)}
-    return ShipParams(**{k: float(v) for k, v in flat.items() if k in names})
+    names = {f.name for f in fields(ShipParams)} - {"hull_form"}
+    missing = [k for k in required_coefficients(form) if k not in flat]
+    if missing:
+        raise ParameterError(missing[0], f"a number (every coefficient of the '{form}' form: "
+                             f"{', '.join(missing)} missing)", None)
+    wrong = sorted(k for k in _FORM_ONLY[[f for f in HULL_FORMS if f != form][0]] if k in flat)
+    if wrong:
+        raise ParameterError(wrong[0], f"no coefficient of another hull form in a '{form}' file", flat[wrong[0]])
+    bad = [k for k in sorted(names & flat.keys())
+           if isinstance(flat[k], bool) or not isinstance(flat[k], (int, float)) or not math.isfinite(flat[k])]
+    if bad:
+        raise ParameterError(bad[0], "a finite number", flat[bad[0]])
+    return ShipParams(hull_form=form, **{k: float(v) for k, v in flat.items() if k in names})
+
+
+def load_ship(path: str | Path) -> ShipParams:
+    """Ship particulars and coefficients of a vessel data file (any :data:`HULL_FORMS`).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        TOML data file in the format of the packaged ``kcs_mmg.toml`` / ``kvlcc2_mmg.toml``.
+    """
+    return ship_from_table(_read_toml(path))
 
 
 def load_kcs(path: str | Path | None = None) -> ShipParams:
@@ -284,7 +384,7 @@ def load_kcs(path: str | Path | None = None) -> ShipParams:
     >>> round(kcs.m, 6), round(kcs.Izz, 6)
     (0.18228, 0.011432)
     """
-    return _packaged_kcs() if path is None else _ship_from(_read_toml(path))  # frozen: sharing is safe
+    return _packaged_kcs() if path is None else ship_from_table(_read_toml(path))  # frozen: sharing is safe
 
 
 def load_steering(path: str | Path | None = None) -> SteeringParams:
@@ -295,7 +395,21 @@ def load_steering(path: str | Path | None = None) -> SteeringParams:
     path : str or pathlib.Path, optional
         TOML data file to read instead of the packaged one.
     """
-    s = _read_toml(path)["steering"]
+    return steering_from_table(_read_toml(path))
+
+
+def steering_from_table(raw: dict) -> SteeringParams:
+    """:class:`SteeringParams` from the ``[steering]`` block of a parsed vessel data file.
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed TOML file.
+    """
+    s = raw["steering"]
+    for k in ("delta_max_deg", "T_delta", "rate_max_deg_per_s"):
+        if not isinstance(s.get(k), (int, float)) or isinstance(s.get(k), bool):
+            raise ParameterError(f"steering.{k}", "a number", s.get(k))
     return SteeringParams(float(s["delta_max_deg"]), float(s["T_delta"]), float(s["rate_max_deg_per_s"]))
 
 
