@@ -528,3 +528,138 @@ def hold_heading(fresh, held, own_pos, own_speed, nb_pos, nb_vel, active, *, col
     ok = heading_feasible(own_pos, own_speed, held, nb_pos, nb_vel, act, collision_distance=collision_distance,
                           cone=cone)
     return ca.if_else(any_active * ok, held, fresh)
+
+
+def speed_levels(service_rpm, dead_slow_rpm, rpm_per_speed, n_levels):
+    """Propeller speeds and steady speeds of the levels searched by :func:`velocity_obstacle_speed`.
+
+    ``n_levels`` propeller speeds evenly spaced from the service rpm (level 0) down to dead slow ahead
+    (level ``n_levels - 1``); a ship whose service rpm is already at or below dead slow has every level at its
+    service rpm. The steady speed of each level is its rpm over ``rpm_per_speed``: in this model the steady
+    straight-line speed is proportional to the propeller speed (the surge balance X_H(u) + X_P(u, n) = 0 is
+    homogeneous of degree 2 in u and n: X_H ∝ u², X_P ∝ n² K_T(J), J ∝ u/n), so the rpm of the speed
+    ``s`` is ``s`` times :func:`~mmg_casadi.vessel.mmg.propeller_rpm_for_speed` (1).
+
+    Parameters
+    ----------
+    service_rpm : float or casadi scalar
+        The ship's service propeller speed (rev/min), level 0.
+    dead_slow_rpm : float or casadi scalar
+        Dead slow ahead (rev/min), the last level.
+    rpm_per_speed : float
+        Propeller speed of the steady speed 1 U (rev/min per U).
+    n_levels : int
+        Number of levels (≥ 2).
+
+    Returns
+    -------
+    list of (rpm, speed)
+        One pair per level, level 0 first.
+
+    Examples
+    --------
+    >>> [(float(n), float(s)) for n, s in speed_levels(100.0, 25.0, 100.0, 4)]
+    [(100.0, 1.0), (75.0, 0.75), (50.0, 0.5), (25.0, 0.25)]
+    """
+    if isinstance(n_levels, bool) or not isinstance(n_levels, (int, np.integer)) or n_levels < 2:
+        raise ParameterError("n_levels", "an integer >= 2", n_levels)
+    span = ca.fmax(service_rpm - dead_slow_rpm, 0)
+    out = []
+    for k in range(int(n_levels)):
+        rpm = service_rpm - (k / (n_levels - 1)) * span
+        out.append((rpm, rpm / rpm_per_speed))
+    return out
+
+
+def velocity_obstacle_speed(own_pos, goal, nb_pos, nb_vel, active, *, levels, collision_distance, n_candidates,
+                            speed_weight, cone=PARAMETERS["vo_cone"].default):
+    """Desired heading and propeller speed chosen by the linear velocity obstacle over headings and speed levels.
+
+    The constant-speed search of :func:`velocity_obstacle` is run at the steady speed of every level of
+    ``levels`` (:func:`speed_levels`); a level counts when its heading passes the cone test
+    (:func:`heading_feasible`) at that speed. Its cost is the distance of its velocity from the preferred
+    velocity (the service speed towards the goal), over the service speed, plus ``speed_weight`` times the speed
+    reduction as a fraction of the service speed: ``|v − v_pref| / V_0 + w (V_0 − V) / V_0``. With ``w = 0`` it
+    is the selection rule of the velocity-obstacle literature, the admissible velocity closest to the preferred
+    one (Fiorini & Shiller 1998, Int. J. Robot. Res. 17(7); van den Berg, Lin & Manocha 2008, ICRA); at one
+    speed it is the heading closest to the goal direction, the rule of :func:`velocity_obstacle` (the paper's
+    baseline), since ``|v − v_pref|`` grows with the angle. The counting level of least cost wins (strict <, so
+    the faster level wins a tie); when no level counts the slowest level is taken with its own fallback heading
+    (the least-penetrating candidate): slacken speed (COLREG Rule 8(e)) and steer the least-bad heading.
+
+    The velocity obstacle of Huang et al. 2018 (Ocean Eng. 151) is a set of velocities, course and speed; the
+    paper's baseline (and :func:`velocity_obstacle`) searches the headings at the present speed only. This
+    function is the reading with speed changes, offered as the method ``velocity-obstacle-speed`` so the two
+    readings can be compared on the same scenarios.
+
+    Parameters
+    ----------
+    own_pos : array-like (2,) or casadi.SX
+        Own-ship position (L).
+    goal : array-like (2,) or casadi.SX
+        Goal position (L).
+    nb_pos : array-like (2, M) or casadi.SX
+        Neighbour positions, one column per neighbour (L).
+    nb_vel : array-like (2, M) or casadi.SX
+        Neighbour velocities, one column per neighbour (U).
+    active : array-like (M,) or casadi.SX
+        1 for a neighbour that counts, 0 for one that is ignored.
+    levels : list of (rpm, speed)
+        The levels of :func:`speed_levels`, level 0 (the service speed) first.
+    collision_distance : float or casadi scalar
+        Combined radius D of the cone (L).
+    n_candidates : int
+        Number of candidate headings evenly spread around the circle.
+    speed_weight : float or casadi scalar
+        Extra cost of a speed reduction w (per unit of reduction, a fraction of the service speed; ≥ 0).
+    cone : str, default 'huang'
+        Cone formula, ``"huang"`` or ``"wide"`` (see :class:`VelocityObstacleParams`).
+
+    Returns
+    -------
+    psi, rpm, level : casadi.DM, SX or MX
+        Desired heading (rad), propeller speed (rev/min) and the index of the chosen level.
+
+    Examples
+    --------
+    A ship crossing from starboard, 5.7 L away: at the service speed the goal-closest free heading is 45° to
+    starboard; at half speed 13.5° to port is free and closer to the preferred velocity; an extra weight of 1
+    per unit of slowing makes the ship turn instead:
+
+    >>> import casadi as ca
+    >>> lv = speed_levels(100.0, 25.0, 100.0, 4)
+    >>> nb, v = ca.DM([[4], [-4]]), ca.DM([[0], [1]])
+    >>> kw = dict(levels=lv, collision_distance=2.0, n_candidates=80)
+    >>> psi, rpm, k = velocity_obstacle_speed([0, 0], [50, 0], nb, v, [1], speed_weight=0.0, **kw)
+    >>> round(float(psi) * 180 / ca.pi, 6), float(rpm), int(k)
+    (-13.5, 50.0, 2)
+    >>> psi, rpm, k = velocity_obstacle_speed([0, 0], [50, 0], nb, v, [1], speed_weight=1.0, **kw)
+    >>> round(float(psi) * 180 / ca.pi, 6), float(rpm), int(k)
+    (45.0, 100.0, 0)
+    >>> psi, rpm, k = velocity_obstacle_speed([0, 0], [50, 0], nb, v, [0], speed_weight=0.0, **kw)
+    >>> round(float(psi) * 180 / ca.pi, 6), float(rpm), int(k)  # nobody active: service rpm towards the goal
+    (0.0, 100.0, 0)
+    """
+    own_pos, goal = _col2(own_pos), _col2(goal)
+    goal_heading = ca.atan2(goal[1] - own_pos[1], goal[0] - own_pos[0])
+    speed0 = levels[0][1]
+    best_c, best_psi, best_rpm, best_k = _BIG, None, None, None
+    for k, (rpm, speed) in enumerate(levels):
+        psi = velocity_obstacle(own_pos, speed, goal, nb_pos, nb_vel, active, collision_distance=collision_distance,
+                                n_candidates=n_candidates, cone=cone)
+        ok = heading_feasible(own_pos, speed, psi, nb_pos, nb_vel, active, collision_distance=collision_distance,
+                              cone=cone)
+        gap = 2 * speed * speed0 * (1 - ca.cos(psi - goal_heading)) + (speed0 - speed) ** 2
+        cost = ca.sqrt(gap) / speed0 + speed_weight * (speed0 - speed) / speed0
+        if k == 0:
+            better = ok
+            best_psi, best_rpm, best_k = psi, rpm, ca.DM(0)
+        else:
+            better = ok * (cost < best_c)
+        best_c = ca.if_else(better, cost, best_c)
+        best_psi = ca.if_else(better, psi, best_psi)
+        best_rpm = ca.if_else(better, rpm, best_rpm)
+        best_k = ca.if_else(better, k, best_k)
+    found = best_c < _BIG / 2
+    return (ca.if_else(found, best_psi, psi), ca.if_else(found, best_rpm, rpm),
+            ca.if_else(found, best_k, len(levels) - 1))
