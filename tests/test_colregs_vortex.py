@@ -52,36 +52,45 @@ def terms(nb_pos, nb_vel, goal=FAR_GOAL):
 # --- Rule 17 -------------------------------------------------------------------------------------------------
 
 def test_stand_on_keeps_course_while_the_give_way_ship_still_has_time():
-    # crossing from port on a collision course, TCPA 10 > t_act and range 14 L > r_act: 17(a)(i), no deviation
+    # crossing from port on a collision course, TCPA 10 > t_act: 17(a)(i), no deviation
     pos, vel = collision_course(90.0, 10.0)
-    assert pos[1] < 0 and math.hypot(*pos) > CV.r_act
+    assert pos[1] < 0 and 10.0 > CV.t_act
     assert heading(FAR_GOAL, pos, vel) == pytest.approx(0.0, abs=1e-9)
     # the paper's modified vortex acts on the same ship (the behaviour this method changes)
     assert heading(FAR_GOAL, pos, vel, method="modified") > 1.0
 
 
 def test_stand_on_acts_alone_below_the_trigger_turning_to_starboard():
-    pos, vel = collision_course(90.0, 6.0)  # TCPA below t_act, CPA 0 < d_cpa_act: 17(a)(ii)
+    pos, vel = collision_course(90.0, 3.5)  # TCPA below t_act, CPA 0 < d_cpa_act: 17(a)(ii)
     t = terms(pos, vel)
     assert int(t["stand_on"]) == 1 and int(t["act_alone"]) == 1
     assert heading(FAR_GOAL, pos, vel) >= math.degrees(CV.dpsi_min) - 1e-9
 
 
 def test_stand_on_does_not_act_when_the_cpa_is_already_safe():
-    pos, vel = collision_course(90.0, 6.0, offset=CV.d_cpa_act + 2.0)
+    pos, vel = collision_course(90.0, 3.5, offset=CV.d_cpa_act + 0.5)
     t = terms(pos, vel)
     assert int(t["stand_on"]) == 1 and int(t["act_alone"]) == 0
-    assert float(t["dcpa"]) == pytest.approx(CV.d_cpa_act + 2.0, rel=1e-9)
+    assert float(t["dcpa"]) == pytest.approx(CV.d_cpa_act + 0.5, rel=1e-9)
     assert heading(FAR_GOAL, pos, vel) == pytest.approx(0.0, abs=1e-9)
 
 
-@pytest.mark.parametrize("course", [30.0, 60.0, 90.0, 120.0, 150.0])
-@pytest.mark.parametrize("tcpa", [1.5, 3.0, 5.0])
+@pytest.mark.parametrize("course", [30.0, 60.0, 90.0, 120.0, 135.0])
+@pytest.mark.parametrize("tcpa", [1.5, 3.0, 3.9])
 def test_stand_on_never_turns_to_port_for_a_ship_crossing_from_port(course, tcpa):
     pos, vel = collision_course(course, tcpa)  # 17(c)
     assert pos[1] < 0
     assert int(terms(pos, vel)["act_alone"]) == 1
     assert heading(FAR_GOAL, pos, vel) > 0.0
+
+
+def test_fine_crossing_from_port_is_taken_as_head_on_rule_14c():
+    # a ship on course 150° meeting the own ship (north): each within 22.5° of the other's bow but the courses
+    # 30° from reciprocal; the scorer calls it a crossing (own stand-on), the method assumes head-on in doubt
+    pos, vel = collision_course(150.0, 3.0)
+    t = terms(pos, vel)
+    assert int(t["role"]) == 4 and int(t["head_on"]) == 1 and int(t["stand_on"]) == 0
+    assert heading(FAR_GOAL, pos, vel) >= math.degrees(CV.dpsi_min) - 1e-9
 
 
 @pytest.mark.parametrize("side, turn", [(+0.5, -1), (-0.5, +1)])

@@ -15,8 +15,9 @@ from mmg_casadi.guidance.velocity_obstacle import heading_feasible
 CV = ColregsVortexParams()
 KW = dict(lam_sink=-100.0, k_vor0=-10.0, r_safe=15.0, r_tol=2.0, gamma_max=5 * math.pi / 8) | CV.as_dict()
 OWN = dict(own_pos=[0.0, 0.0], own_psi=0.0, own_vel=[1.0, 0.0])
-# a ship meeting the own ship head-on 10 L ahead and a buoy (static) on the own starboard bow
-HEAD_ON = ([10.0, 0.0], [-1.0, 0.0])
+# a ship meeting the own ship head-on 10 L ahead, beyond r_cq, at 1.6 U (TCPA 3.8 < t_act: the give-way ship
+# escalates) and a buoy (static) on the own starboard bow
+HEAD_ON = ([10.0, 0.0], [-1.6, 0.0])
 
 
 def heading(nb_pos, nb_vel, **override):
@@ -87,7 +88,7 @@ def test_the_ship_never_turns_towards_a_close_ship(nb, nb_vel):
 def test_symbolic_function_matches_numeric_call_with_the_filter_acting():
     x = ca.SX.sym("x", 2)
     nb = ca.SX.sym("nb", 2, 2)
-    nb_vel = ca.DM([[-1.0, 0.0], [0.0, 0.0]])
+    nb_vel = ca.DM([[-1.6, 0.0], [0.0, 0.0]])
     f = ca.Function("cv", [x, nb], [colregs_vortex(x, 0.0, [1.0, 0.0], [50.0, 0.0], nb, nb_vel, [1, 1], **KW)])
     args = (ca.DM([0.0, 0.0]), ca.DM([[10.0, 2.0], [0.0, 3.0]]))  # the first buoy case above
     h_sym = float(heading_of(f(*args)))

@@ -2,35 +2,44 @@
 extended with what a watch officer does and the paper leaves out.
 
 Per neighbour (one column of ``nb_pos`` / ``nb_vel``; conventions and shapes as in :mod:`mmg_casadi.guidance.fields`).
-The own ship's *planned course* is the bearing of its next waypoint at its current speed; roles and "what if I
-keep my course" predictions are judged against it, so the own evasive turn changes neither (no latched state).
+Velocities are over the ground; a neighbour slower than ``v_ship_min`` is a static obstacle without a COLREG role.
+The own ship's *planned course* is the bearing of its next waypoint at its current speed: what it resumes.
 
-- **Role** (Rules 13–15). γ is the bearing of the neighbour from the planned course, α the bearing of the own
-  ship from the neighbour's bow (its heading taken from its velocity). The own ship is **stand-on** for a ship
-  abaft its beam (``|γ| > γ_max``: being overtaken, Rule 13) and for a ship on its port side (γ < 0) that is neither
-  on a nearly reciprocal course (Rule 14: ``|γ|`` and the course difference from reciprocal both below θ_ho) nor
-  being overtaken by the own ship (``|α| > γ_max``). Everything else, including static obstacles (speed below
-  ``v_ship_min``), is **give-way** and gets the paper's modified vortex
-  (:func:`~mmg_casadi.guidance.fields.modified_vortex_terms`).
+- **Encounters with a memory** (:mod:`mmg_casadi.guidance.colregs_encounters`). A ship within R_safe whose
+  straight-line passing distance at the present velocities is below ``d_risk`` while the range closes is a risk
+  of collision (Rule 7). At its onset the own ship's role is judged against her *actual* heading and the
+  bearings, as the encounter scorer judges it (:mod:`mmg_casadi.colregs.roles`): overtaking, overtaken,
+  head-on (Rule 14(c): a ship nearly ahead that has the own ship nearly ahead is head-on, in doubt), give-way
+  (on the starboard side) or stand-on (on the port side). The role is kept in the method's memory rows until
+  the encounter is released (the ship leaves R_safe), so neither ship's manoeuvre changes it.
+- **Stand-on** (stand-on, overtaken; Rule 17). **17(a)(i)**: while the give-way ship can still act the own ship
+  keeps the course she had at the onset (``cv_course``) and her speed: the ship part of the field is that
+  course, and a static obstacle is circled only once within ``r_act`` (it would otherwise alter the course the
+  give-way ship relies on). **17(a)(ii)**: she acts alone once the give-way ship's inaction is apparent: the
+  passing distance at the present velocities is still below ``d_cpa_act`` when the TCPA falls below ``t_act``
+  (for an overtaker, which closes slowly, also when the range falls below ``r_act``). The action, once begun,
+  is kept until the ship is past and resuming the planned course would pass at ``d_clear`` or more: the
+  heading closest to a readily apparent alteration (``dpsi_min``) to starboard of her course whose straight-line
+  passing distance to every ship is at least ``d_risk`` (the linear velocity obstacle of Huang et al. 2018,
+  Ocean Eng. 151, with that combined radius), and for a ship crossing from port forward of the beam a speed
+  reduction by ``speed_cut`` (commanded propeller speed, followed through the engine model). **17(c)**: the
+  preferred heading is to starboard and the Rule 8 step below keeps the alteration to starboard unless the
+  velocity obstacle leaves only a port turn of more than ``dpsi_min``. **17(b)**: the close-quarters filter and
+  the guard below remain the last resort (within ``r_cq`` the filter may begin the action before the TCPA cue).
+- **Give-way** (give-way, head-on, overtaking; Rules 13–16). The paper's modified vortex
+  (:func:`~mmg_casadi.guidance.fields.modified_vortex_terms`) for the ship, from the onset, early; the duty stays
+  open until the ship is past (range opening) and clear: resuming the planned course would pass at ``d_clear``
+  or more and, for a ship crossing from starboard, would not cross ahead of her (Rule 15). A give-way ship whose
+  manoeuvre still leads inside ``d_cpa_act`` when the TCPA falls below ``t_act`` escalates with an escape term
+  of strength ``k_standon · t_act / max(min(TCPA, TCPA_plan, t_act), t_close)`` pointing off the other ship's
+  track plus, with half weight, perpendicular to the relative velocity, mirrored to starboard.
+- **Rule 8**: while a give-way duty is open or the ship acts alone, the heading from the ship terms differs by at
+  least ``dpsi_min`` to starboard from the heading at the onset of the duty or of the action (``cv_base``; the goal
+  bearing without memory) — always to starboard for head-on and crossing duties (Rules 14, 15), otherwise unless
+  the field already turns further to port (an overtaking ship may pass on either side). Static obstacles and the
+  guard below are added after this step, so they keep their full say.
 - **Static obstacles** get the vortex only while the range closes (once it opens the ship is past it; without
   this a far goal's weak sink lets the vortex hold the ship in an orbit about the obstacle).
-- **Rule 17(a)(i)**: a stand-on neighbour gets no vortex — course and speed are kept.
-- **Rule 17(a)(ii) and 17(b)**: the stand-on ship acts alone when the give-way ship has not made the passing
-  safe in time: the CPA distance *if the own ship kept its planned course* is below ``d_cpa_act`` while the
-  TCPA is below ``t_act`` or the range below ``r_act``. A give-way ship whose *present* manoeuvre still leads
-  inside ``d_cpa_act`` under the same timing (the other ship not helping) escalates the same way. The action is
-  an escape term of strength ``k_standon · t_act / max(min(TCPA, TCPA_now, t_act), t_close)`` (growing to the
-  "best aid" of 17(b) as TCPA falls to ``t_close``, and held there while the present motion already opens the
-  range but resuming the planned course would not be safe) pointing off the neighbour's track (the part of
-  the line of sight across its course) plus, with half weight, perpendicular to the relative velocity. It
-  never turns to port (**17(c)** for a vessel crossing from port; Rules 14/15 for an escalating give-way ship;
-  a port component is mirrored to starboard) except away from an overtaking ship, i.e. to the side opposite
-  the one on which it would pass.
-- **Rule 8**: while any ship is a threat (give-way with a planned-course CPA below ``d_clear`` and TCPA > 0, or
-  a ship the own ship acts for), the heading from the ship terms differs from the bearing of the goal by at
-  least ``dpsi_min`` to starboard (readily apparent), unless they already turn further to port. It acts as soon
-  as the ship is inside R_safe, i.e. early. Static obstacles and the guard below are added after this step, so
-  they keep their full say.
 - **Near the goal** (the paper's second failure mechanism): while anything is being avoided, the sink's strength
   is evaluated at max(distance to the goal, distance to the nearest avoided neighbour, ``d_att_floor``): by
   default the goal never attracts more strongly than a goal at the edge of R_safe, so the vortex of a ship or of
@@ -39,18 +48,18 @@ keep my course" predictions are judged against it, so the own evasive turn chang
   term for whatever the rules above did not resolve.
 - **Close quarters** (Rule 17(b) "best aid to avoid collision", Rule 2(b) departure to avoid immediate danger):
   the heading of the whole field is kept unless its velocity (at the current speed) lies inside the collision
-  cone of a ship or obstacle within ``r_cq``, the linear velocity obstacle of Huang et al. 2018 (Ocean Eng. 151)
-  with combined radius ``d_cq`` (:mod:`mmg_casadi.guidance.velocity_obstacle`). The velocity judged is the one at the
-  heading the ship turns through next on its way to the field's, at most ``dpsi_cq`` from its present heading
-  (a reversal to starboard through a ship abeam is not admissible because its end point is); if it is inside
-  a cone, the ship steers the admissible heading (the velocity obstacle's candidate) closest to a readily
-  apparent alteration of its present heading to starboard (``dpsi_min``, Rule 8): a small alteration it can
-  complete quickly, to starboard unless that is much longer (the least-penetrating candidate if none is
-  admissible). Terms of several neighbours, or of a neighbour and the rules, can cancel or point into a third
-  ship; this filter is what keeps their sum out of the way of whatever is close.
+  cone of a ship or obstacle within ``r_cq``, the linear velocity obstacle with combined radius ``d_cq``
+  (:mod:`mmg_casadi.guidance.velocity_obstacle`). The velocity judged is the one at the heading the ship turns
+  through next on its way to the field's, at most ``dpsi_cq`` from its present heading (a reversal to starboard
+  through a ship abeam is not admissible because its end point is); if it is inside a cone, the ship steers the
+  admissible heading closest to a readily apparent alteration of its present heading to starboard
+  (``dpsi_min``, Rule 8) (the least-penetrating candidate if none is admissible). Terms of several neighbours,
+  or of a neighbour and the rules, can cancel or point into a third ship; this filter is what keeps their sum
+  out of the way of whatever is close.
 
-Everything is branch-free CasADi (0/1 products and ``if_else``), with no closed-loop state. The exact switches
-are used even when the closed loop asks for smooth ones (``Layout.smooth``).
+Everything is branch-free CasADi (0/1 products and ``if_else``); the memory is
+:data:`~mmg_casadi.guidance.colregs_encounters.MEMORY` (:func:`colregs_vortex_command`). The exact switches are
+used even when the closed loop asks for smooth ones (``Layout.smooth``).
 """
 
 from __future__ import annotations
@@ -63,6 +72,9 @@ import casadi as ca
 from mmg_casadi.params import PARAMETERS, check_fields
 from mmg_casadi.params import field as param_field
 from mmg_casadi.guidance.fields import R_MIN, _col2, _matrix, _row, modified_vortex_terms, vortex
+from mmg_casadi.guidance.colregs_encounters import (ACTING, GIVE_WAY, HEAD_ON, MEMORY, OVERTAKEN, OVERTAKING,
+                                                    STAND_ON, classify_role, open_encounters, recall, remember,
+                                                    slots_of)
 from mmg_casadi.guidance.ilos import wrap_angle
 from mmg_casadi.guidance.velocity_obstacle import heading_feasible, velocity_obstacle
 
@@ -77,20 +89,22 @@ class ColregsVortexParams:
     Parameters
     ----------
     theta_head_on : float
-        Tolerance, both on the bearing from the bow and on the course difference from reciprocal, within which
-        a meeting counts as head-on (rad, (0, π/2)); 22.5° as the paper laboratory's head-on sector 7π/8–9π/8
-        of relative heading.
+        Tolerance on both bearings (each ship from the other's bow) within which a meeting counts as head-on
+        (rad, (0, π/2)); 22.5° as the paper laboratory's head-on sector 7π/8–9π/8 of relative heading.
     d_cpa_act : float
-        The stand-on ship acts alone when its planned-course CPA distance is below this (L, > 0); 3 L = 1.5 ×
-        the 2 L collision distance, below the ≈ 4 L (2 R_tol) passing distance the modified vortex's give-way
-        action aims at, so a give-way ship that acts as the paper's does never triggers it.
+        The stand-on ship acts alone when the passing distance at the present velocities is below this (L, > 0);
+        3 L = 1.5 × the 2 L collision distance, below the ≈ 4 L (2 R_tol) passing distance the modified vortex's
+        give-way action aims at, so a give-way ship that acts as the paper's does never triggers it.
     t_act : float
-        TCPA below which the stand-on ship acts alone, 17(a)(ii) (L/U, > 0); 7 L/U ≈ 2.2 min for the KCS
-        (L/U ≈ 18.6 s): a give-way ship that entered R_safe = 15 L in a right-angle crossing (closing speed
-        √2 U, TCPA ≈ 10.6) had ≈ 3.6 L/U, more than twice its time to alter course by 30°, to act.
+        TCPA below which the give-way ship's inaction is apparent and the stand-on ship acts alone, 17(a)(ii)
+        (L/U, > 0); 4 L/U ≈ 75 s for the KCS (L/U ≈ 18.6 s). Cockcroft & Lameijer (7th ed., on Rule 17): in
+        open sea a give-way ship that has not acted by about 2 nm in a crossing of two merchant ships has
+        usually waited too long, i.e. once a substantial alteration no longer completes well before the CPA; the
+        KCS takes 3.7 L/U for a 60° alteration.
     r_act : float
-        Range below which it acts alone whatever the TCPA (L, > 0); 8 L = 4 collision distances, for slowly
-        closing ships (being overtaken) whose TCPA stays long.
+        Range below which the stand-on ship acts alone for an overtaker whatever the TCPA, and within which a
+        static obstacle is circled while she keeps her course (L, > 0); 8 L = 4 collision distances, for
+        slowly closing ships whose TCPA stays long.
     t_close : float
         TCPA at which the stand-on action reaches its full strength, 17(b) close quarters (L/U, > 0); 3 L/U is
         about the KCS's time to turn 90° with full rudder.
@@ -98,11 +112,16 @@ class ColregsVortexParams:
         Strength of the stand-on escape term at the trigger (L/unit time, > 0); 1.0 matches the sink of the
         paper's Λ = −100 at the 15 L detection range (100 / 2π 15 ≈ 1.06).
     dpsi_min : float
-        Minimum alteration from the goal bearing while a threat is present, Rule 8 "readily apparent" (rad,
-        [0, π/2]); 30° as NTNU's evaluator (Hagen et al. 2023 configuration, Δχ_app).
+        Minimum alteration, from the heading at the onset of a give-way duty or of the stand-on action, Rule 8
+        "readily apparent" (rad, [0, π/2]); 30° as NTNU's evaluator (Hagen et al. 2023 configuration, Δχ_app).
     d_clear : float
-        Planned-course passing distance below which a give-way ship keeps its alteration (L, > 0); 6 L = 3
-        collision distances, above the 4 L the vortex aims at so the ship resumes its course only when clear.
+        Planned-course passing distance below which a give-way (or acting stand-on) ship keeps its alteration
+        (L, > 0); 6 L = 3 collision distances, above the 4 L the vortex aims at so the ship resumes its course
+        only when clear.
+    d_risk : float
+        Risk of collision, the onset of an encounter: passing distance at the present velocities below this
+        while the range closes (L, > 0); 4 L = twice the paper's 2 L collision distance, as the iitm-lab
+        scoring profile's gate.
     v_ship_min : float
         Neighbours slower than this are static obstacles without COLREG role (U, > 0); 0.05 is below the
         slowest ship speed a scenario allows (0.2).
@@ -127,6 +146,10 @@ class ColregsVortexParams:
         way there, at most this far from its present heading (rad, (0, π]); 45° ≈ what the KCS turns in
         half of ``t_close`` (3 L/U ≈ its 90° turn with full rudder), while the PD's rudder is saturated
         anyway for any larger heading error.
+    speed_cut : float
+        Fraction of the service propeller speed a stand-on ship takes off while she acts alone for a ship
+        crossing from port forward of her beam ([0, 1)); 0.5 as Hagen et al. 2023's readily apparent speed
+        reduction.
     """
 
     theta_head_on: float = param_field("cv_theta_head_on_deg", math.pi / 180.0)
@@ -137,6 +160,7 @@ class ColregsVortexParams:
     k_standon: float = param_field("cv_k_standon")
     dpsi_min: float = param_field("cv_dpsi_min_deg", math.pi / 180.0)
     d_clear: float = param_field("cv_d_clear")
+    d_risk: float = param_field("cv_d_risk")
     v_ship_min: float = param_field("cv_v_ship_min")
     r_guard: float = param_field("cv_r_guard")
     lam_guard: float = param_field("cv_lam_guard")
@@ -144,6 +168,7 @@ class ColregsVortexParams:
     r_cq: float = param_field("cv_r_cq")
     d_cq: float = param_field("cv_d_cq")
     dpsi_cq: float = param_field("cv_dpsi_cq_deg", math.pi / 180.0)
+    speed_cut: float = param_field("cv_speed_cut")
 
     def __post_init__(self):
         check_fields(self)
@@ -167,31 +192,52 @@ def _cpa(rel_pos, rel_vel):
     return tcpa, p_cpa
 
 
+def _crosses_ahead(los, nb_vel, v_own):
+    """1 where the own ship, sailing at ``v_own``, would cross the neighbour's course line ahead of her (1×M)."""
+    m = los.size2()
+    speed_nb = ca.sqrt(ca.sum1(nb_vel * nb_vel))
+    h = nb_vel / ca.repmat(ca.fmax(speed_nb, 1e-9), 2, 1)
+    rel = -los  # own position relative to the neighbour
+    side = h[0, :] * rel[1, :] - h[1, :] * rel[0, :]
+    v = ca.repmat(v_own, 1, m)
+    rate = h[0, :] * v[1, :] - h[1, :] * v[0, :]  # d(side)/dt (her own motion is along the line)
+    t_x = -side / ca.if_else(ca.fabs(rate) > 1e-9, rate, 1e-9)
+    along = ca.sum1(h * rel) + t_x * (ca.sum1(h * v) - speed_nb)
+    return (t_x > 0) * (along > 0) * (ca.fabs(rate) > 1e-9)
+
+
+def _is(code, role):
+    return ca.fabs(code - role) < 0.5
+
+
 def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_vor0, r_safe, r_tol, gamma_max,
                          theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear,
-                         v_ship_min, r_guard, lam_guard, d_att_floor=None, r_cq=None, d_cq=None,
-                         dpsi_cq=None):
+                         v_ship_min, r_guard, lam_guard, d_risk=PARAMETERS["cv_d_risk"].default, speed_cut=None,
+                         d_att_floor=None, r_cq=None, d_cq=None,
+                         dpsi_cq=None, code=None, reference=None):
     """Per-neighbour quantities of :func:`colregs_vortex` (each a 1×M row unless stated).
 
-    Keys: ``gamma`` (bearing from the planned course), ``d``, ``ship`` (1 for a moving neighbour), ``head_on``,
-    ``stand_on``, ``tcpa`` / ``dcpa`` (for the own ship keeping its planned course), ``act_alone`` (1 where the
-    stand-on ship acts alone, 17(a)(ii)/(b)), ``act`` (``act_alone`` or a give-way escalation), ``weight``
-    (strength of the escape term), ``escape`` (2×M unit escape directions), ``k_vor`` (give-way vortex
-    strength), ``threat`` (1 where the Rule 8 minimum alteration applies), ``guard`` (radial push strength),
-    ``avoid`` (1 where the neighbour is being avoided). ``d_att_floor``, ``r_cq``, ``d_cq`` and ``dpsi_cq`` are
-    accepted so that :meth:`ColregsVortexParams.as_dict` can be passed whole; only :func:`colregs_vortex` uses
-    them.
+    Keys: ``beta`` (bearing from the own bow), ``d``, ``ship`` (1 for a moving neighbour), ``risk`` (Rule 7 now),
+    ``role_now`` (the role judged now), ``role`` (the encounter's role, 0: none), ``stand_on``, ``head_on``,
+    ``tcpa`` / ``dcpa`` (at the present velocities), ``duty`` (1 while a give-way duty is open), ``holding`` (1
+    while a stand-on ship keeps her course and speed), ``cue`` (1 at the step her action alone begins),
+    ``acting`` (1 once it has begun), ``act_alone`` and ``act`` (``act_alone`` or a give-way escalation),
+    ``weight`` (strength of the escape term), ``escape`` (2×M unit escape directions), ``k_vor`` (vortex
+    strength), ``threat`` (1 where the Rule 8 minimum alteration applies), ``slow`` (1 where the stand-on action
+    includes the speed reduction), ``guard`` (radial push strength), ``avoid`` (1 where the neighbour is being
+    avoided). ``speed_cut``, ``d_att_floor``, ``r_cq``, ``d_cq`` and ``dpsi_cq`` are accepted so that
+    :meth:`ColregsVortexParams.as_dict` can be passed whole; only :func:`colregs_vortex` uses them.
 
     Parameters
     ----------
     own_pos : array_like
         Own position (2×1, L).
     own_psi : float or casadi.SX or casadi.MX
-        Own heading (rad, from x towards y).
+        Own heading (rad, from x towards y); roles are judged against it.
     own_vel : array_like
         Own velocity in the global frame (2×1, L/unit time); its magnitude is the speed of the planned course.
     goal : array_like
-        Own goal, the next waypoint (2×1, L); the planned course points at it.
+        Own goal, the next waypoint (2×1, L); the planned course (resumed when past and clear) points at it.
     nb_pos : array_like
         Neighbour positions (2×M, L); M may be 0.
     nb_vel : array_like
@@ -199,13 +245,22 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     k_vor0, r_safe, r_tol, gamma_max : float
         Modified-vortex parameters, as in :class:`~mmg_casadi.guidance.fields.ModifiedVortexParams`: nominal vortex
         strength (L²/unit time), detection radius R_safe (L), R_tol of the tangential-velocity threshold (L)
-        and the largest ``|γ|`` at which the vortex acts (rad).
+        and the largest ``|γ|`` at which the vortex acts (rad; also the stern sector of Rule 13(b)).
     theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon : float
         COLREG thresholds of :class:`ColregsVortexParams` (meaning, units and ranges there).
     dpsi_min, d_clear, v_ship_min, r_guard, lam_guard : float
         The remaining COLREG thresholds of :class:`ColregsVortexParams`.
-    d_att_floor, r_cq, d_cq, dpsi_cq : float, optional
+    d_risk : float, optional
+        Passing distance below which a closing ship is a risk of collision (L; the table's ``cv_d_risk``).
+    speed_cut, d_att_floor, r_cq, d_cq, dpsi_cq : float, optional
         Ignored here (see above).
+    code : array_like, optional
+        Each neighbour's remembered encounter code (1×M, :mod:`mmg_casadi.guidance.colregs_encounters`: role, plus
+        ``ACTING`` once the stand-on ship acts; 0: no encounter); default: every ship with a risk of collision in
+        the role judged now (no memory).
+    reference : float or casadi.SX, optional
+        The heading the own alterations are measured from (rad): the side of the Rule 17(c) check. Default: the
+        goal bearing.
 
     Returns
     -------
@@ -217,8 +272,8 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     >>> import casadi as ca
     >>> kw = dict(k_vor0=-10.0, r_safe=15.0, r_tol=2.0, gamma_max=5 * ca.pi / 8, **ColregsVortexParams().as_dict())
     >>> t = colregs_vortex_terms([0, 0], 0.0, [1, 0], [50, 0], ca.DM([[10], [-10]]), ca.DM([[0], [1]]), **kw)
-    >>> int(t["stand_on"]), int(t["act"]), round(float(t["tcpa"]), 3)  # crossing from port, far: hold on
-    (1, 0, 10.0)
+    >>> int(t["stand_on"]), int(t["act"]), int(t["holding"]), round(float(t["tcpa"]), 3)  # from port, far: hold
+    (1, 0, 1, 10.0)
     """
     own_pos, own_vel, goal = _col2(own_pos), _col2(own_vel), _col2(goal)
     nb_pos, nb_vel = _matrix(nb_pos, 2), _matrix(nb_vel, 2)
@@ -227,84 +282,185 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
                                r_tol=r_tol, gamma_max=gamma_max)
     d = mv["d"]
     los = nb_pos - ca.repmat(own_pos, 1, m)
-    # planned course: towards the goal at the current speed (what "keeping course" means for this ship); roles
-    # are judged against it, so an evasive turn does not change them
     own_speed = ca.sqrt(ca.sumsqr(own_vel))
     to_goal = goal - own_pos
     e_goal = to_goal / ca.fmax(ca.sqrt(ca.sumsqr(to_goal)), R_MIN)
-    v_plan = own_speed * e_goal
+    v_plan = own_speed * e_goal  # the planned course: towards the goal at the current speed
     psi_plan = ca.atan2(e_goal[1], e_goal[0])
-    gamma = wrap_angle(ca.atan2(los[1, :], los[0, :]) - psi_plan)
     speed_nb = ca.sqrt(ca.sum1(nb_vel * nb_vel))
     ship = speed_nb > v_ship_min
     chi_nb = ca.atan2(nb_vel[1, :], nb_vel[0, :])
+    beta = wrap_angle(ca.atan2(los[1, :], los[0, :]) - own_psi)
     alpha = wrap_angle(ca.atan2(-los[1, :], -los[0, :]) - chi_nb)
-    recip = wrap_angle(chi_nb - psi_plan - ca.pi)
-    head_on = (ca.fabs(recip) < theta_head_on) * (ca.fabs(gamma) < theta_head_on)
-    astern = ca.fabs(gamma) > gamma_max
-    overtaking_it = ca.fabs(alpha) > gamma_max
-    port_crossing = (gamma < 0) * (1 - astern) * (1 - overtaking_it) * (1 - head_on)
-    stand_on = ship * ((astern + port_crossing) > 0)
-    tcpa, p_cpa = _cpa(los, nb_vel - ca.repmat(v_plan, 1, m))
-    dcpa = ca.sqrt(ca.sum1(p_cpa * p_cpa))
-    closing = tcpa > 0
-    soon = ((tcpa < t_act) + (d < r_act)) > 0
-    act_alone = stand_on * closing * (dcpa < d_cpa_act) * soon
-    # a give-way ship whose present manoeuvre still leads into close quarters (the other ship not helping)
-    # escalates with the same escape term
     v_rel = nb_vel - ca.repmat(own_vel, 1, m)
-    tcpa_now, p_cpa_now = _cpa(los, v_rel)
-    dcpa_now = ca.sqrt(ca.sum1(p_cpa_now * p_cpa_now))
-    soon_now = ((tcpa_now < t_act) + (d < r_act)) > 0
-    escalate = ship * (1 - stand_on) * (1 - astern) * (tcpa_now > 0) * (dcpa_now < d_cpa_act) * soon_now
+    tcpa, p_cpa = _cpa(los, v_rel)
+    dcpa = ca.sqrt(ca.sum1(p_cpa * p_cpa))
+    past = tcpa <= 0
+    risk = ship * (1 - past) * (dcpa < d_risk)
+    role_now = classify_role(beta, alpha, own_psi, chi_nb, own_speed, speed_nb, theta_head_on=theta_head_on,
+                             stern=gamma_max)
+    code = risk * role_now if code is None else _row(code, m)
+    remembered = code > ACTING + 0.5
+    role = ship * (code - ACTING * remembered)
+    overtaken = _is(role, OVERTAKEN)
+    stand_on = _is(role, STAND_ON) + overtaken
+    head_on = _is(role, HEAD_ON)
+    crossing = _is(role, GIVE_WAY)
+    giveway = crossing + head_on + _is(role, OVERTAKING)
+    # resuming the planned course: its passing distance, and whether it crosses ahead of the ship (Rule 15)
+    tcpa_plan, p_cpa_plan = _cpa(los, nb_vel - ca.repmat(v_plan, 1, m))
+    unsafe_plan = (tcpa_plan > 0) * (ca.sqrt(ca.sum1(p_cpa_plan * p_cpa_plan)) < d_clear)
+    ahead_plan = _crosses_ahead(los, nb_vel, v_plan)
+    # a give-way duty stays open until the ship is past (range opening) and clear (resuming is safe and does not
+    # cross ahead of a ship crossing from starboard)
+    duty = giveway * (((1 - past) + unsafe_plan + crossing * ahead_plan) > 0)
+    # Rule 17: keep course and speed while the give-way ship can still act; act alone once her inaction is apparent
+    # (the range trigger only for an overtaker, which closes slowly: acting early for a crossing ship would
+    # meet the give-way ship's own late action, the danger of Rule 17(a)(ii) that Cockcroft & Lameijer discuss)
+    soon = ((tcpa < t_act) + overtaken * (d < r_act)) > 0
+    cue = stand_on * (1 - remembered) * (1 - past) * (dcpa < d_cpa_act) * soon
+    acting = stand_on * ((remembered + cue) > 0)
+    act_alone = acting * (((1 - past) + unsafe_plan) > 0)
+    holding = stand_on * (1 - acting) * (1 - past)
+    # a give-way ship whose present manoeuvre still leads into close quarters (the other not helping) escalates
+    escalate = duty * (1 - past) * (dcpa < d_cpa_act) * soon
     act = ((act_alone + escalate) > 0)
-    # strength grows as either TCPA falls; it stays at its maximum while the present motion already opens the
-    # range (TCPA_now < 0) but resuming the planned course would not yet be safe
-    weight = act * k_standon * t_act / ca.fmax(ca.fmin(ca.fmin(tcpa, tcpa_now), t_act), t_close)
+    weight = act * k_standon * t_act / ca.fmax(ca.fmin(ca.fmin(tcpa_plan, tcpa), t_act), t_close)
+    # the speed reduction of a stand-on ship acting for a ship crossing from port forward of her beam
+    slow = act_alone * _is(role, STAND_ON) * (ca.fabs(beta) < ca.pi / 2)
 
     # escape: perpendicular to the actual relative velocity, on the side the rules ask for ...
     n = -v_rel / ca.repmat(ca.fmax(ca.sqrt(ca.sum1(v_rel * v_rel)), 1e-9), 2, 1)
     e_plus = ca.vertcat(-n[1, :], n[0, :])  # n turned 90° from x towards y
-    c, s = ca.cos(psi_plan), ca.sin(psi_plan)
+    ref = psi_plan if reference is None else reference
+    c, s = ca.cos(ref), ca.sin(ref)
     lat_plus = -s * e_plus[0, :] + c * e_plus[1, :]  # > 0: e_plus points to the own starboard side
     lat_cpa = -s * p_cpa[0, :] + c * p_cpa[1, :]  # > 0: the neighbour would pass on the own starboard side
-    side = 1 - 2 * astern * (lat_cpa > 0)  # +1 starboard (17(c) and default), -1 port (away from an overtaker)
+    side = 1 - 2 * overtaken * (lat_cpa > 0)  # +1 starboard (17(c) and default), -1 port (away from an overtaker)
     flip = 2 * ((side * lat_plus) >= 0) - 1
     # ... plus getting off the neighbour's track: the part of −LOS across its course, relative to the range
-    course = nb_vel / ca.repmat(ca.fmax(speed_nb, 1e-9), 2, 1)
-    along = ca.sum1(los * course)
-    off_track = -(los - course * ca.repmat(along, 2, 1)) / ca.repmat(d, 2, 1)
+    heading_nb = nb_vel / ca.repmat(ca.fmax(speed_nb, 1e-9), 2, 1)
+    along = ca.sum1(los * heading_nb)
+    off_track = -(los - heading_nb * ca.repmat(along, 2, 1)) / ca.repmat(d, 2, 1)
     escape = 0.5 * e_plus * ca.repmat(flip, 2, 1) + 2 * off_track
     # never to port except away from an overtaker (17(c); Rules 14/15 for an escalating give-way ship): a port
-    # component is mirrored to starboard of the planned course
+    # component is mirrored to starboard of the course kept
     lat_esc = -s * escape[0, :] + c * escape[1, :]
-    mirror = (1 - astern) * (ca.fabs(lat_esc) - lat_esc)
+    mirror = (1 - overtaken) * (ca.fabs(lat_esc) - lat_esc)
     escape = escape + ca.vertcat(-s, c) @ mirror
     escape = escape / ca.repmat(ca.fmax(ca.sqrt(ca.sum1(escape * escape)), 1e-9), 2, 1)
 
-    giveway = 1 - stand_on
-    # a static obstacle is circled only while the range closes: once it opens the ship is past it (without this
-    # the vortex can hold the ship in an orbit about an obstacle when the goal is far and its sink weak)
-    k_vor = giveway * mv["k_vor"] * (ship + (1 - ship) * (mv["v_r"] < 0))
-    threat = ship * closing * ((giveway * (1 - astern) * (dcpa < d_clear) + act) > 0)
+    # the paper's modified vortex for a ship the own ship gives way to, while the duty is open; a static obstacle
+    # is circled only while the range closes (once it opens the ship is past it; without this the vortex can hold
+    # the ship in an orbit about an obstacle when the goal is far and its sink weak)
+    k_vor = mv["k_vor"] * (ship * duty + (1 - ship) * (mv["v_r"] < 0))
+    threat = ship * ((duty + act) > 0)
     guard = lam_guard * ca.fmax(0, 1 / d - 1 / r_guard)  # radial push away inside r_guard, whatever the rules
-    avoid = ((k_vor != 0) + act + threat + (d < r_guard)) > 0
-    return {"gamma": gamma, "d": d, "ship": ship, "head_on": head_on, "stand_on": stand_on, "tcpa": tcpa,
-            "dcpa": dcpa, "act_alone": act_alone, "act": act, "weight": weight, "escape": escape, "k_vor": k_vor,
-            "threat": threat, "guard": guard, "avoid": avoid}
+    avoid = ((k_vor != 0) + act + threat + holding + (d < r_guard)) > 0
+    return {"beta": beta, "d": d, "ship": ship, "risk": risk, "role_now": role_now, "role": role,
+            "stand_on": stand_on, "head_on": head_on, "crossing": crossing, "tcpa": tcpa, "dcpa": dcpa,
+            "duty": duty, "holding": holding, "cue": cue, "acting": acting, "act_alone": act_alone, "act": act,
+            "weight": weight, "escape": escape, "k_vor": k_vor, "threat": threat, "slow": slow, "guard": guard,
+            "avoid": avoid}
+
+
+def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink, k_vor0, r_safe, r_tol,
+           gamma_max, theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear, v_ship_min,
+           r_guard, lam_guard, d_att_floor, speed_cut, r_cq, d_cq, dpsi_cq, n_candidates, code, course, base,
+           d_risk=PARAMETERS["cv_d_risk"].default):
+    """Desired-heading vector, speed factor and terms of :func:`colregs_vortex` (``terms`` None without neighbours)."""
+    own_pos, own_vel, goal = _col2(own_pos), _col2(own_vel), _col2(goal)
+    nb_pos, nb_vel = _matrix(nb_pos, 2), _matrix(nb_vel, 2)
+    m = nb_pos.size2()
+    to_goal = goal - own_pos
+    dist_goal = ca.fmax(ca.sqrt(ca.sumsqr(to_goal)), R_MIN)
+    psi_goal = ca.atan2(to_goal[1], to_goal[0])
+    if m == 0:
+        return -lam_sink / (2 * ca.pi * dist_goal * dist_goal) * to_goal, ca.DM(1), None
+    active = _row(active, m)
+    t = colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, k_vor0=k_vor0, r_safe=r_safe,
+                             r_tol=r_tol, gamma_max=gamma_max, theta_head_on=theta_head_on, d_cpa_act=d_cpa_act,
+                             t_act=t_act, r_act=r_act, t_close=t_close, k_standon=k_standon, dpsi_min=dpsi_min,
+                             d_clear=d_clear, v_ship_min=v_ship_min, r_guard=r_guard, lam_guard=lam_guard,
+                             d_risk=d_risk, code=code, reference=base)
+    avoid = active * t["avoid"]
+    d_threat = ca.mmin(avoid * t["d"] + (1 - avoid) * _BIG)
+    d_eff = ca.fmax(dist_goal, ca.if_else(d_threat < _BIG / 2, ca.fmax(d_threat, d_att_floor), 0))
+    att = -lam_sink / (2 * ca.pi * d_eff * dist_goal) * to_goal  # |att| = |Λ| / (2π d_eff), towards the goal
+    vor_ship = ca.sum2(vortex(own_pos, nb_pos, active * t["ship"] * t["k_vor"]))
+    esc = ca.sum2(t["escape"] * ca.repmat(active * t["weight"] * (1 - t["act_alone"]), 2, 1))
+    ships = att + vor_ship + esc
+    duty = ca.sum2(active * t["duty"]) > 0
+    acting = ca.sum2(active * t["act"]) > 0
+    # Rule 17(a)(ii)/(b): a stand-on ship acting alone steers the heading closest to a readily apparent alteration
+    # to starboard of the course she kept whose straight-line passing distance to every ship is at least d_risk
+    # (the linear velocity obstacle of Huang et al. 2018 with that combined radius)
+    alone = ca.sum2(active * t["act_alone"]) > 0
+    psi_pref = (psi_goal if base is None else base) + dpsi_min
+    speed_now = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
+    psi_alone = velocity_obstacle(own_pos, speed_now, own_pos + ca.vertcat(ca.cos(psi_pref), ca.sin(psi_pref)),
+                                  nb_pos, nb_vel, active * t["ship"], collision_distance=d_risk,
+                                  n_candidates=n_candidates, current_heading=own_psi)
+    ships = ca.if_else(alone, ca.sqrt(ca.sumsqr(att)) * ca.vertcat(ca.cos(psi_alone), ca.sin(psi_alone)), ships)
+    # Rule 17(a)(i): while a stand-on ship keeps her course and speed (and has no give-way duty to another ship),
+    # the ship part of the field is the course kept
+    hold = (ca.sum2(active * t["holding"]) > 0) * (1 - duty) * (1 - acting)
+    kept = own_psi if course is None else course
+    ships = ca.if_else(hold, ca.sqrt(ca.sumsqr(att)) * ca.vertcat(ca.cos(kept), ca.sin(kept)), ships)
+    # Rule 8 on the ship part only: obstacles and the close-range guard keep their full say afterwards. The
+    # alteration is measured from the heading at the onset of the give-way duty or of the stand-on action
+    # (``base``), else from the goal bearing
+    apparent = ca.sum2(active * t["threat"]) > 0
+    ref = psi_goal if base is None else ca.if_else(ca.logic_or(duty, acting), base, psi_goal)
+    # the alteration counted through the present heading, so a turn past ±180° from the reference does not flip
+    delta = wrap_angle(own_psi - ref) + wrap_angle(ca.atan2(ships[1], ships[0]) - own_psi)
+    # head-on and crossing give-way ships alter to starboard only (Rules 14, 15); otherwise starboard unless the
+    # field turns to port by more than the minimum itself (several neighbours, an overtaker on the starboard side)
+    starboard_only = ca.sum2(active * t["duty"] * (t["head_on"] + t["crossing"])) > 0
+    delta_min = ca.if_else(ca.logic_or(starboard_only, delta > -dpsi_min), ca.fmax(delta, dpsi_min), delta)
+    psi_s = ref + ca.if_else(apparent, delta_min, delta)
+    ships = ca.if_else(ca.logic_or(apparent, hold), ca.sqrt(ca.sumsqr(ships)) * ca.vertcat(ca.cos(psi_s), ca.sin(psi_s)),
+                       ships)
+    # a static obstacle is circled from R_safe, but while the ship keeps her course and speed for a give-way ship
+    # only once it is within r_act: the encounter with the ship is usually resolved before, and an alteration
+    # for the obstacle would mislead the give-way ship (Rule 17(a)(i)); the guard and the close-quarters filter
+    # keep their say
+    near = 1 - hold * (t["d"] >= r_act)
+    vor_static = ca.sum2(vortex(own_pos, nb_pos, active * (1 - t["ship"]) * t["k_vor"] * near))
+    rep = ca.sum2((ca.repmat(own_pos, 1, m) - nb_pos) * ca.repmat(active * t["guard"] / t["d"], 2, 1))
+    out = ships + vor_static + rep
+    # close quarters: keep the field's heading unless it leads into the cone of something within r_cq
+    close = active * (t["d"] < r_cq)
+    psi_f = ca.atan2(out[1], out[0])
+    # the heading the ship turns through next: at most dpsi_cq from its own on the way to the field's
+    psi_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_cq), dpsi_cq)
+    speed = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
+    ok = heading_feasible(own_pos, speed, psi_next, nb_pos, nb_vel, close, collision_distance=d_cq)
+    psi_pref = own_psi + dpsi_min  # a readily apparent alteration to starboard (Rule 8) is preferred
+    e_pref = ca.vertcat(ca.cos(psi_pref), ca.sin(psi_pref))
+    psi_vo = velocity_obstacle(own_pos, speed, own_pos + e_pref, nb_pos, nb_vel, close, collision_distance=d_cq,
+                               n_candidates=n_candidates, current_heading=own_psi)
+    psi_out = ca.if_else(ok, psi_f, psi_vo)
+    factor = 1 - speed_cut * (ca.sum2(active * t["slow"]) > 0)
+    return ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_out), ca.sin(psi_out)), factor, t
 
 
 def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink, k_vor0, r_safe, r_tol,
                    gamma_max, theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear,
-                   v_ship_min, r_guard, lam_guard, d_att_floor, r_cq=0.0, d_cq=PARAMETERS["cv_d_cq"].default,
+                   v_ship_min, r_guard, lam_guard, d_att_floor, d_risk=PARAMETERS["cv_d_risk"].default,
+                   speed_cut=PARAMETERS["cv_speed_cut"].default,
+                   r_cq=0.0, d_cq=PARAMETERS["cv_d_cq"].default,
                    dpsi_cq=PARAMETERS["cv_dpsi_cq_deg"].default * math.pi / 180.0,
-                   n_candidates=PARAMETERS["vo_candidates"].default):
+                   n_candidates=PARAMETERS["vo_candidates"].default, code=None, course=None, base=None):
     """Desired-heading vector of ``colregs-vortex`` (2×1; its direction is the desired heading).
 
-    Sink at the goal (strength capped while avoiding), the modified vortex at every active give-way ship, the
-    escape term of every ship the own ship acts for, the Rule 8 minimum alteration, then the modified vortex
-    of static obstacles and the close-range guard, and finally the close-quarters filter of its heading; see the
-    module docstring. ``active`` (1×M, 0/1) masks neighbours as in :mod:`mmg_casadi.guidance.fields`.
+    Sink at the goal (strength capped while avoiding), the modified vortex at every ship the own ship gives way to,
+    the escape term of every ship the own ship acts for, the course kept for a stand-on encounter, the Rule 8
+    minimum alteration, then the modified vortex of static obstacles and the close-range guard, and finally the
+    close-quarters filter of its heading; see the module docstring. ``active`` (1×M, 0/1) masks neighbours as in
+    :mod:`mmg_casadi.guidance.fields`. Without ``code``, ``course`` and ``base`` (the method's memory,
+    :func:`colregs_vortex_command`) every ship with a risk of collision has the role judged now, the course kept
+    is the present heading and alterations are measured from the goal bearing.
 
     Parameters
     ----------
@@ -334,6 +490,11 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
         The remaining COLREG thresholds of :class:`ColregsVortexParams`.
     d_att_floor : float
         While anything is avoided, the goal attracts at most as strongly as from this distance (L, ≥ 0).
+    d_risk : float, optional
+        Passing distance below which a closing ship is a risk of collision (L; the table's ``cv_d_risk``).
+    speed_cut : float
+        Fraction of the propeller speed a stand-on ship takes off while she acts for a ship crossing from port
+        (the speed factor is returned by :func:`colregs_vortex_command` only).
     r_cq : float
         Close-quarters range of the heading filter (L, ≥ 0; 0, the default here, disables it).
     d_cq : float
@@ -344,6 +505,12 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
     n_candidates : int
         Candidate headings of the filter's velocity obstacle (evenly spread; the closed loop passes the layout's
         ``vo_candidates``).
+    code : array_like, optional
+        Remembered encounter codes (1×M; see :func:`colregs_vortex_terms`).
+    course : float or casadi.SX, optional
+        The course a stand-on ship keeps (rad).
+    base : float or casadi.SX, optional
+        The heading at the onset of the open give-way duties (rad), from which Rule 8's alteration is measured.
 
     Returns
     -------
@@ -360,49 +527,65 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
     >>> round(float(heading_of(v)), 6)  # stand-on, give-way ship still has time: keep course
     0.0
     >>> v = colregs_vortex([0, 0], 0.0, [1, 0], [50, 0], ca.DM([[12], [0]]), ca.DM([[-1], [0]]), [1], **kw)
-    >>> round(math.degrees(float(heading_of(v))))  # head-on at 12 L: give way to starboard, escalating
-    79
+    >>> round(math.degrees(float(heading_of(v))))  # head-on at 12 L: give way to starboard
+    53
     """
-    own_pos, own_vel, goal = _col2(own_pos), _col2(own_vel), _col2(goal)
+    return _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, lam_sink=lam_sink, k_vor0=k_vor0,
+                  r_safe=r_safe, r_tol=r_tol, gamma_max=gamma_max, theta_head_on=theta_head_on, d_cpa_act=d_cpa_act,
+                  t_act=t_act, r_act=r_act, t_close=t_close, k_standon=k_standon, dpsi_min=dpsi_min, d_clear=d_clear,
+                  v_ship_min=v_ship_min, r_guard=r_guard, lam_guard=lam_guard, d_att_floor=d_att_floor,
+                  d_risk=d_risk, speed_cut=speed_cut, r_cq=r_cq, d_cq=d_cq, dpsi_cq=dpsi_cq, n_candidates=n_candidates, code=code,
+                  course=course, base=base)[0]
+
+
+def colregs_vortex_command(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, memory, **kw):
+    """One step of ``colregs-vortex`` with its memory: desired-heading vector, propeller-speed factor and the memory
+    rows after the step.
+
+    The encounters are recalled from ``memory`` (:mod:`mmg_casadi.guidance.colregs_encounters`), a ship with a
+    new risk of collision gets a free slot and the role judged now, and :func:`colregs_vortex` runs with the
+    remembered roles, the course kept (``cv_course``: held while a stand-on duty is open and no give-way duty;
+    otherwise the present heading, so the course kept after a give-way duty is the one the ship then has) and the
+    heading at the onset of the give-way duties (``cv_base``).
+
+    Parameters
+    ----------
+    own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active
+        As for :func:`colregs_vortex` (CasADi SX).
+    memory : dict
+        The rows :data:`~mmg_casadi.guidance.colregs_encounters.MEMORY` at the start of the step, by name.
+    **kw
+        The keyword arguments of :func:`colregs_vortex` other than ``code``, ``course`` and ``base``.
+
+    Returns
+    -------
+    tuple
+        ``(heading 2×1, factor, memory)``: the desired-heading vector, the fraction of the service propeller
+        speed to sail at, and the rows of :data:`~mmg_casadi.guidance.colregs_encounters.MEMORY` after the step.
+    """
+    own_pos, own_vel = _col2(own_pos), _col2(own_vel)
     nb_pos, nb_vel = _matrix(nb_pos, 2), _matrix(nb_vel, 2)
     m = nb_pos.size2()
-    to_goal = goal - own_pos
-    dist_goal = ca.fmax(ca.sqrt(ca.sumsqr(to_goal)), R_MIN)
-    psi_goal = ca.atan2(to_goal[1], to_goal[0])
     if m == 0:
-        return -lam_sink / (2 * ca.pi * dist_goal * dist_goal) * to_goal
+        vec, factor, _ = _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, ca.SX(1, 0), code=None,
+                                course=None, base=None, **kw)
+        return vec, factor, {k: own_psi for k in MEMORY}
     active = _row(active, m)
-    t = colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, k_vor0=k_vor0, r_safe=r_safe,
-                             r_tol=r_tol, gamma_max=gamma_max, theta_head_on=theta_head_on, d_cpa_act=d_cpa_act,
-                             t_act=t_act, r_act=r_act, t_close=t_close, k_standon=k_standon, dpsi_min=dpsi_min,
-                             d_clear=d_clear, v_ship_min=v_ship_min, r_guard=r_guard, lam_guard=lam_guard)
-    avoid = active * t["avoid"]
-    d_threat = ca.mmin(avoid * t["d"] + (1 - avoid) * _BIG)
-    d_eff = ca.fmax(dist_goal, ca.if_else(d_threat < _BIG / 2, ca.fmax(d_threat, d_att_floor), 0))
-    att = -lam_sink / (2 * ca.pi * d_eff * dist_goal) * to_goal  # |att| = |Λ| / (2π d_eff), towards the goal
-    vor_ship = ca.sum2(vortex(own_pos, nb_pos, active * t["ship"] * t["k_vor"]))
-    esc = ca.sum2(t["escape"] * ca.repmat(active * t["weight"], 2, 1))
-    ships = att + vor_ship + esc
-    # Rule 8 on the ship part only: obstacles and the close-range guard keep their full say afterwards
-    apparent = ca.sum2(active * t["threat"]) > 0
-    delta = wrap_angle(ca.atan2(ships[1], ships[0]) - psi_goal)
-    delta_min = ca.if_else(delta > -dpsi_min, ca.fmax(delta, dpsi_min), delta)  # starboard unless the field turns
-    # to port by more than the minimum itself (several neighbours, an overtaker on the own starboard side)
-    psi_s = psi_goal + ca.if_else(apparent, delta_min, delta)
-    ships = ca.sqrt(ca.sumsqr(ships)) * ca.vertcat(ca.cos(psi_s), ca.sin(psi_s))
-    vor_static = ca.sum2(vortex(own_pos, nb_pos, active * (1 - t["ship"]) * t["k_vor"]))
-    rep = ca.sum2((ca.repmat(own_pos, 1, m) - nb_pos) * ca.repmat(active * t["guard"] / t["d"], 2, 1))
-    out = ships + vor_static + rep
-    # close quarters: keep the field's heading unless it leads into the cone of something within r_cq
-    close = active * (t["d"] < r_cq)
-    psi_f = ca.atan2(out[1], out[0])
-    # the heading the ship turns through next: at most dpsi_cq from its own on the way to the field's
-    psi_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_cq), dpsi_cq)
-    speed = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
-    ok = heading_feasible(own_pos, speed, psi_next, nb_pos, nb_vel, close, collision_distance=d_cq)
-    psi_pref = own_psi + dpsi_min  # a readily apparent alteration to starboard (Rule 8) is preferred
-    e_pref = ca.vertcat(ca.cos(psi_pref), ca.sin(psi_pref))
-    psi_vo = velocity_obstacle(own_pos, speed, own_pos + e_pref, nb_pos, nb_vel, close, collision_distance=d_cq,
-                               n_candidates=n_candidates, current_heading=own_psi)
-    psi_out = ca.if_else(ok, psi_f, psi_vo)
-    return ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_out), ca.sin(psi_out))
+    course, base = memory["cv_course"], memory["cv_base"]
+    # the role judged now (as colregs_vortex_terms judges it) for a ship that opens an encounter
+    now = colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, code=None, reference=base,
+                               **{k: v for k, v in kw.items() if k not in ("lam_sink", "n_candidates")})
+    link, code = recall(nb_pos, active, slots_of(memory))
+    opened = active * now["risk"] * (code == 0)
+    link, code = open_encounters(nb_pos, active * now["risk"], now["role_now"], link, code)
+    # a new give-way duty measures its alteration from the heading at its onset
+    base = ca.if_else(ca.sum2(opened * (now["role_now"] > GIVE_WAY - 0.5)) > 0, own_psi, base)
+    vec, factor, t = _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, code=code, course=course,
+                            base=base, **kw)
+    code_next = t["role"] + ACTING * t["acting"]
+    busy = ca.sum2(active * ((t["duty"] + t["act"]) > 0)) > 0
+    holding = ca.sum2(active * t["holding"]) > 0
+    out = remember(nb_pos, link, code_next, own_psi)
+    out["cv_course"] = ca.if_else(holding * (1 - busy), course, own_psi)
+    out["cv_base"] = ca.if_else(busy, base, own_psi)
+    return vec, factor, out
