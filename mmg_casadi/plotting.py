@@ -13,6 +13,9 @@ from matplotlib.colors import hsv_to_rgb
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
 
+FIGURE_DPI = 150
+"""Resolution of every saved figure (PNG, dots per inch): the figures of the studies, the tuning and the site."""
+
 COLORS = ("tab:blue", "tab:red", "tab:green", "tab:orange", "tab:purple", "tab:brown", "tab:pink",
           "tab:gray", "tab:olive", "tab:cyan")
 
@@ -150,6 +153,26 @@ def marine_axes(ax):
     ax.grid(True, alpha=0.3)
 
 
+LAND_COLOR = "#e8d9a8"
+"""Fill colour of land (the buff of a paper chart's land tint)."""
+
+
+def draw_land(ax, land) -> None:
+    """Fill land polygons on ``ax`` in the chart style: buff land, a dark coastline (marine axes: x up, y right).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw into.
+    land : sequence of LandSpec
+        Land polygons (``points`` in L).
+    """
+    for k, poly in enumerate(land):
+        pts = np.asarray(poly.points, float)
+        ax.fill(pts[:, 1], pts[:, 0], facecolor=LAND_COLOR, edgecolor="#5a4a2a", lw=1.2, zorder=0,
+                label="land" if k == 0 else None)
+
+
 def plot_maneuver(result, path=None) -> Figure:
     """Trajectory (marine view) and time histories of heading, rudder and speed of a manoeuvre.
 
@@ -186,12 +209,12 @@ def plot_maneuver(result, path=None) -> Figure:
     a2.legend(fontsize=8)
     a3 = fig.add_subplot(gs[2, 1], sharex=a1)
     a3.plot(result.t, np.hypot(result.state("u"), result.state("v")))
-    a3.set_ylabel("U/U_des")
+    a3.set_ylabel("U/U_des [-]")
     a3.set_xlabel("t [L/U]")
     for a in (a1, a2, a3):
         a.grid(True, alpha=0.3)
     if path:
-        fig.savefig(path, dpi=120)
+        fig.savefig(path, dpi=FIGURE_DPI)
     return fig
 
 
@@ -233,6 +256,7 @@ def plot_paths(result, ax, *, title=None):
     for w in sc.walls:
         pts = np.asarray(w.points)
         ax.plot(pts[:, 1], pts[:, 0], "k-", lw=2)
+    draw_land(ax, getattr(sc, "land", ()))
     # R_safe circle around the own ship at its closest approach
     own = result.metrics["ships"][0]
     if N + len(sc.obstacles) > 1:
@@ -294,7 +318,7 @@ def plot_scenario(result, path=None, *, title=None) -> Figure:
     a2.legend(fontsize=7)
     a2.grid(True, alpha=0.3)
     if path:
-        fig.savefig(path, dpi=110)
+        fig.savefig(path, dpi=FIGURE_DPI)
     return fig
 
 
@@ -344,7 +368,7 @@ def plot_tracking(result, path=None) -> Figure:
     for a in (a1, a2, a3):
         a.grid(True, alpha=0.3)
     if path:
-        fig.savefig(path, dpi=110)
+        fig.savefig(path, dpi=FIGURE_DPI)
     return fig
 
 
@@ -384,13 +408,14 @@ def plot_fleet(result, path=None, *, title=None, ax=None) -> Figure:
             ax.plot(traj.state("y", i)[k], traj.state("x", i)[k], "kx", ms=6, mew=1.5)
     for o in sc.obstacles:
         ax.plot(o.position[1], o.position[0], "ks", ms=2.5)
+    draw_land(ax, getattr(sc, "land", ()))
     marine_axes(ax)
     ships = result.metrics["ships"]
     n_col = sum(s["collided"] for s in ships)
     n_goal = sum(s["reached_goal"] for s in ships)
     ax.set_title(title or f"{N} ships: {n_col} in a collision (×), {n_goal} reached their goals")
     if path is not None:
-        fig.savefig(path, dpi=150)
+        fig.savefig(path, dpi=FIGURE_DPI)
     return fig
 
 

@@ -257,7 +257,7 @@ def test_batch_ce_mcte_agree_with_run_scenario(reference_rows):
     ({"backend": "x"}, "backend"),
     ({"methods": ("modified-vortex", "nope")}, "methods"),
     ({"envs": "0-2"}, "envs"),
-    ({"envs": (6,)}, "envs"),
+    ({"envs": (7,)}, "envs"),
     ({"base_seed": -1}, "base_seed"),
     ({"workers": 0}, "workers"),
     ({"params": {"kd": -1.0}}, "params.kd"),

@@ -148,12 +148,12 @@ def test_to_dict_is_plain_python():
     assert isinstance(d["starts"], list) and len(d["starts"]) == 6
 
 
-@pytest.mark.parametrize("env", [0, 6, -1, "1", 1.0, True, None])
+@pytest.mark.parametrize("env", [0, 7, -1, "1", 1.0, True, None])
 def test_invalid_environment(env):
     with pytest.raises(InputError) as err:
         sample_scenario(env, 0)
     assert err.value.field == "environment"
-    assert "1-5" in err.value.allowed
+    assert "1-6" in err.value.allowed
 
 
 @pytest.mark.parametrize("field, kwargs", [("run", {"run": -1}), ("run", {"run": 1.5}),
@@ -198,7 +198,7 @@ def test_parse_envs(text, expected):
     assert parse_envs(text) == expected
 
 
-@pytest.mark.parametrize("text", ["", "0", "6", "1-6", "5-1", "a", "1,,2", "1-", "1.5", None])
+@pytest.mark.parametrize("text", ["", "0", "7", "1-7", "5-1", "a", "1,,2", "1-", "1.5", None])
 def test_parse_envs_rejects(text):
     with pytest.raises(InputError) as err:
         parse_envs(text)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import datetime
 import tomllib
 from importlib.resources import files
 
@@ -63,7 +64,12 @@ points = [[0.0, 5.0], [50.0, 55.0], [60, 55]]
 """
 
 SCENARIO_DIR = files("mmg_casadi") / "data" / "scenarios"
-SHIPPED = ("head_on", "crossing", "overtaking", "static_obstacle", "conflict", "narrow_channel")
+SHIPPED = ("head_on", "crossing", "overtaking", "static_obstacle", "conflict", "narrow_channel", "channel_crossing",
+           "narrow_channel_land", "strait_crossing", "fjord_island")
+SHIPPED_METHOD = {"channel_crossing": "velocity-obstacle-speed", "strait_crossing": "colregs-vortex",
+                  "fjord_island": "colregs-vortex"}
+"""Shipped scenarios whose method is not the paper's modified vortex (the speed-action demonstration, the land
+scenarios written for colregs-vortex)."""
 
 
 def _base() -> dict:
@@ -166,6 +172,14 @@ BAD = [
     (("walls", 0, "points"), [[0.0, 5.0]], "walls[0].points"),
     (("walls", 0, "points"), [[0.0, 5.0], [0.0, 5.0]], "walls[0].points[1]"),
     (("walls", 0, "points"), [[0.0, 5.0], [1.0, True]], "walls[0].points[1]"),
+    (("ships", 1, "length_m"), 0.0, "ships[1].length_m"),
+    (("ships", 1, "length_m"), "122 m", "ships[1].length_m"),
+    (("ships", 1, "beam_m"), -20.0, "ships[1].beam_m"),
+    (("ships", 1, "metadata"), "BASTO VI", "ships[1].metadata"),
+    (("ships", 1, "metadata"), {"sogMax": float("inf")}, "ships[1].metadata.sogMax"),
+    (("ships", 1, "metadata"), {"a": {"b c": [1, None]}}, 'ships[1].metadata.a."b c"[1]'),
+    (("ships", 1, "metadata"), {"t": datetime.datetime(2025, 1, 1)}, "ships[1].metadata.t"),
+    (("ships", 1, "metadata"), {"id": 2 ** 64}, "ships[1].metadata.id"),
 ]
 
 
@@ -240,10 +254,31 @@ def test_round_trip_odd_values():
     assert scenario_from_dict(tomllib.loads(dump_scenario(s))) == s
 
 
+def test_ship_size_and_metadata_round_trip(tmp_path):
+    meta = {"id": "0f8c2d4e-5a6b-4c7d-9e0f-123456789abc", "mmsi": 257000123, "shipType": "Passenger",
+            "sogMax": 17.0, "dimensions": {"height": 8.0}, "tags": ["ferry", 2, True], "crew": [{"n": 1}]}
+    d = _base()
+    d["ships"][1].update(length_m=122, beam_m=20.0, metadata=meta)
+    s = scenario_from_dict(d)
+    ship = s.ships[1]
+    assert (ship.length_m, ship.beam_m, ship.metadata) == (122.0, 20.0, meta)
+    assert isinstance(ship.length_m, float) and ship.metadata is not meta
+    assert s.ships[0].length_m is None and s.ships[0].metadata == {}
+    path = tmp_path / "s.toml"
+    path.write_text(dump_scenario(s), encoding="utf-8")
+    back = load_scenario(path)
+    assert back == s and back.ships[1].metadata == meta
+    assert type(back.ships[1].metadata["mmsi"]) is int and type(back.ships[1].metadata["sogMax"]) is float
+    assert "[ships.metadata]" in path.read_text() and "length_m = 122.0" in path.read_text()
+    # metadata is compared but not hashed: a changed value makes a different, equally hashable scenario
+    other = scenario_from_dict({**d, "ships": [d["ships"][0], {**d["ships"][1], "metadata": {"mmsi": 1}}]})
+    assert other != s and hash(other) == hash(s)
+
+
 @pytest.mark.parametrize("name", SHIPPED)
 def test_shipped_scenarios_load_and_round_trip(name):
     s = load_scenario(SCENARIO_DIR / f"{name}.toml")
-    assert s.settings.method == "modified-vortex"
+    assert s.settings.method == SHIPPED_METHOD.get(name, "modified-vortex")
     assert scenario_from_dict(tomllib.loads(dump_scenario(s))) == s
 
 

@@ -85,6 +85,8 @@ class Layout:
         ``"wide"`` or ``"huang"`` (see :mod:`mmg_casadi.guidance.velocity_obstacle`).
     vo_hold : bool
         The velocity obstacle keeps its chosen heading while it stays feasible (``vo_heading`` state).
+    vo_speed_levels : int
+        Speed levels searched by ``velocity-obstacle-speed`` (service rpm down to dead slow ahead).
     smooth : float or None
         ``None`` for the exact switching logic; a sharpness ``s > 0`` replaces every switch by a sigmoid of
         that sharpness (for gradient-based tuning).
@@ -97,6 +99,10 @@ class Layout:
     neighbours : int
         0 for the unrolled step (every ship and pair written out); ``K > 0`` for the fleet step, one ship's step
         mapped over the fleet with ``K`` neighbour slots (:mod:`mmg_casadi.closed_loop.fleet`).
+    n_land : int
+        How many of the ``n_walls`` segments, the last ones, are edges of land polygons: they are walls to the
+        step (field and contact alike, so the compiled code is the same), and touching one is a grounding
+        (:func:`mmg_casadi.closed_loop.outcome.collision_kind`).
     """
 
     methods: tuple
@@ -106,10 +112,16 @@ class Layout:
     vo_candidates: int = PARAMETERS["vo_candidates"].default
     vo_cone: str = PARAMETERS["vo_cone"].default
     vo_hold: bool = PARAMETERS["vo_hold"].default
+    vo_speed_levels: int = PARAMETERS["vo_speed_levels"].default
     smooth: float | None = None
     disturbed: bool = False
     vessels: tuple = ()
     neighbours: int = 0
+    n_land: int = 0
+
+    def __post_init__(self):
+        if not 0 <= self.n_land <= self.n_walls:
+            raise ValueError(f"n_land: expected 0 to n_walls = {self.n_walls} land edges, got {self.n_land}")
 
     @property
     def n_ships(self) -> int:
@@ -241,6 +253,8 @@ class Layout:
             s += "_" + "_".join(f"{v}{self.vessels.count(v)}" for v in dict.fromkeys(self.vessels))
         if self.neighbours:
             s += f"n{self.neighbours}"
+        if self.vo_speed_levels != PARAMETERS["vo_speed_levels"].default:
+            s += f"_l{self.vo_speed_levels}"
         return (f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}"
                 f"{'h' if self.vo_hold else ''}{s}")
 

@@ -17,7 +17,7 @@ from mmg_casadi.guidance import hazards
 S_ = {name: i for i, name in enumerate(SHIP_STATE)}
 """Column of each common row in a ship's row (:data:`SHIP_STATE`; the memory rows follow them)."""
 
-RUN_FAILURES = ("collision", "timeout", "diverged", "stalled")
+RUN_FAILURES = ("collision", "grounding", "timeout", "diverged", "stalled")
 """How a run fails (:func:`run_outcome`); ``""`` when it succeeds."""
 
 OUTCOMES = ("reached", "diverged", "stalled", "timeout")
@@ -92,7 +92,8 @@ def voyage_metrics(rows: np.ndarray, t_end: float, delta_max: float) -> tuple[np
 
 def collision_kind(layout: Layout, agent: int) -> str:
     """What agent index ``agent`` of a ship's ``collision_with`` / ``d_min_with`` row is: ``"ship"`` or a hazard
-    kind of :data:`~mmg_casadi.guidance.hazards.KINDS` (``"obstacle"``, ``"wall"``).
+    kind of :data:`~mmg_casadi.guidance.hazards.KINDS` (``"obstacle"``, ``"wall"``, ``"land"``: the last
+    ``Layout.n_land`` (:class:`~mmg_casadi.closed_loop.layout.Layout`) wall segments).
 
     Parameters
     ----------
@@ -103,14 +104,15 @@ def collision_kind(layout: Layout, agent: int) -> str:
 
     Examples
     --------
-    >>> lay = Layout(("none", "none"), n_obstacles=1, n_walls=2)
-    >>> [collision_kind(lay, j) for j in range(5)]
-    ['ship', 'ship', 'obstacle', 'wall', 'wall']
+    >>> lay = Layout(("none", "none"), n_obstacles=1, n_walls=3, n_land=1)
+    >>> [collision_kind(lay, j) for j in range(6)]
+    ['ship', 'ship', 'obstacle', 'wall', 'wall', 'land']
     """
     if agent < layout.n_ships:
         return "ship"
     k = agent - layout.n_ships
-    for name, count in (("obstacle", layout.n_obstacles), ("wall", layout.n_walls)):
+    for name, count in (("obstacle", layout.n_obstacles), ("wall", layout.n_walls - layout.n_land),
+                        ("land", layout.n_land)):
         if k < count:
             return hazards.KINDS[name].name
         k -= count
@@ -160,7 +162,8 @@ def run_outcome(layout: Layout, x_final, params: dict) -> dict:
 
     The own ship succeeds when it reached its goal without a collision (with a ship or any hazard); the fleet when
     every ship did. A collision wins over every other failure; a collision partner is labelled ``0-j`` for ship
-    ``j``, ``0-obs<k>`` for obstacle ``k`` and ``0-wall<k>`` for wall segment ``k``.
+    ``j``, ``0-obs<k>`` for obstacle ``k`` and ``0-wall<k>`` for wall segment ``k``. Touching land is the failure
+    ``"grounding"``, its partner ``0-land<k>`` for land edge ``k``.
 
     Parameters
     ----------
@@ -186,8 +189,11 @@ def run_outcome(layout: Layout, x_final, params: dict) -> dict:
     collided = np.array([s["collision_time"] is not None for s in ships])
     if collided[0]:
         j, kind = own["collision_with"], own["collision_kind"]
-        label = {"ship": str(j), "obstacle": f"obs{j - N}", "wall": f"wall{j - N - layout.n_obstacles}"}[kind]
-        failure, pair, failure_time = "collision", f"0-{label}", own["collision_time"]
+        walls = N + layout.n_obstacles
+        label = {"ship": str(j), "obstacle": f"obs{j - N}", "wall": f"wall{j - walls}",
+                 "land": f"land{j - walls - (layout.n_walls - layout.n_land)}"}[kind]
+        failure = "grounding" if kind == "land" else "collision"
+        pair, failure_time = f"0-{label}", own["collision_time"]
     elif reached[0]:
         failure, pair, failure_time = "", "", math.nan
     elif own["status"] == "stalled":

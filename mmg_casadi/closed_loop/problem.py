@@ -17,7 +17,7 @@ from mmg_casadi.closed_loop.simulation import compiled_step
 from mmg_casadi.closed_loop.step import build_closed_loop_step
 from mmg_casadi.errors import ParameterError, ScenarioError
 from mmg_casadi.guidance import methods
-from mmg_casadi.limits import check_size, check_steps
+from mmg_casadi.limits import check_size, check_steps, check_unrolled
 from mmg_casadi.params import resolve
 from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
@@ -187,8 +187,11 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
     for w in sc.walls:
         pts = np.asarray(w.points, float)
         walls += [(a[0], a[1], b[0], b[1]) for a, b in zip(pts[:-1], pts[1:])]
+    land = [(a[0], a[1], b[0], b[1]) for poly in getattr(sc, "land", ()) for a, b in poly.edges]
+    walls += land  # land edges are the last wall segments (Layout.n_land)
     check_size(len(sc.ships), len(sc.obstacles), len(walls), cls=ScenarioError)
-    check_steps(resolved["t_max"], resolved["dt"], cls=error or ParameterError)
+    check_steps(resolved["t_max"], resolved["dt"], cls=error or ParameterError, ships=len(sc.ships))
+    check_unrolled(len(sc.ships), resolved["fleet_from_ships"], cls=error or ParameterError)
     vessels = tuple(getattr(s, "vessel", None) or resolved["vessel"] for s in sc.ships)
     for i, v in enumerate(vessels):
         load_vessel(v, f"ships[{i}].vessel")
@@ -196,8 +199,10 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
                     max_path=max(1 + len(s.waypoints) for s in sc.ships),
                     vo_candidates=resolved["vo_candidates"], vo_cone=resolved["vo_cone"],
                     disturbed=is_disturbed(resolved), vo_hold=resolved["vo_hold"],
+                    vo_speed_levels=resolved["vo_speed_levels"],
                     vessels=() if set(vessels) == {DEFAULT_VESSEL} else vessels,
-                    neighbours=resolved["neighbour_slots"] if len(sc.ships) >= resolved["fleet_from_ships"] else 0)
+                    neighbours=resolved["neighbour_slots"] if len(sc.ships) >= resolved["fleet_from_ships"] else 0,
+                    n_land=len(land))
     model = ClosedLoopModel(layout, resolved)
     ships = tuple(_ship_inputs(s, load_vessel(v).ship) for s, v in zip(sc.ships, vessels))
     obstacles = [(o.position[0], o.position[1], o.radius) for o in sc.obstacles]

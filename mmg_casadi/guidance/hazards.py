@@ -10,6 +10,10 @@ contribution to the guidance field. Kinds (:data:`KINDS`):
 - ``wall``: a straight segment ``(ax, ay, bx, by)``; its field is the paper's line source (§Narrow Waterways,
   :func:`mmg_casadi.guidance.fields.channel_walls`) added to every method's vector; a ship touches it when its
   centre comes within half its beam of the segment.
+- ``land``: an edge of a land polygon, a segment like a wall (same field, same contact at half the beam); the
+  layout keeps land edges as the last wall segments (``Layout.n_land``,
+  :class:`~mmg_casadi.closed_loop.layout.Layout`), so the compiled step treats them as walls, and touching one is
+  reported as a grounding.
 
 Examples
 --------
@@ -93,5 +97,6 @@ class HazardKind:
 KINDS: dict[str, HazardKind] = {k.name: k for k in (
     HazardKind("obstacle", 3, circle_distance, "collision_distance"),
     HazardKind("wall", 4, segment_distance, "half_beam", _wall_field),
+    HazardKind("land", 4, segment_distance, "half_beam", _wall_field),
 )}
 """Every hazard kind, in the order of their blocks in the parameter vector and of their agent indices."""

@@ -21,6 +21,8 @@ this order (the first that applies wins):
     paper's second mechanism);
 ``"ship-ship"``, ``"obstacle"``
     any other collision with a ship or a static obstacle;
+``"grounding"``
+    the own ship touched land (the ``failure`` column's ``"grounding"``);
 ``"stalled"``, ``"timeout"``, ``"diverged"``
     no collision, goal not reached (the ``failure`` column's meaning).
 
@@ -48,7 +50,7 @@ from mmg_casadi.params import PARAMETERS
 from mmg_casadi.vessel.maneuvers import turning_circle
 
 MECHANISMS: tuple[str, ...] = ("started-too-close", "obstacle-near-goal", "near-goal", "ship-ship", "obstacle",
-                               "stalled", "timeout", "diverged")
+                               "grounding", "stalled", "timeout", "diverged")
 """Failure mechanisms, in the order they are checked (see the module notes)."""
 
 @lru_cache(maxsize=8)
@@ -173,10 +175,11 @@ def failure_mechanism(failure: str, *, collision_time=None, collision_with=None,
     """
     if failure in ("", None):
         return ""
-    if failure in ("stalled", "timeout", "diverged"):
+    if failure in ("grounding", "stalled", "timeout", "diverged"):
         return failure
     if failure != "collision":
-        raise InputError("failure", "one of '', 'collision', 'stalled', 'timeout', 'diverged'", failure)
+        raise InputError("failure", "one of '', 'collision', 'grounding', 'stalled', 'timeout', 'diverged'",
+                         failure)
     if collision_time is None or collision_with is None:
         raise InputError("collision_time", "the collision's time and agent for a collision", collision_time)
     goals = np.asarray(goals, float).reshape(-1, 2)

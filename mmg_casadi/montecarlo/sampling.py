@@ -1,7 +1,7 @@
 """Random encounter scenarios of the paper's statistical analysis (Section "Statistical Analysis").
 
 Five environments differ in the number of static obstacles and of dynamic ships besides the own ship
-(:data:`ENVIRONMENTS`). In each run the own ship (ship 0), the static obstacles and the dynamic ships are
+(:data:`ENVIRONMENTS`); a sixth, ours, is a strait with islands (:mod:`mmg_casadi.montecarlo.land_sampling`). In each run the own ship (ship 0), the static obstacles and the dynamic ships are
 placed uniformly in a square of side ``area`` (in ship lengths L) with the paper's rules:
 
 * all starting points (ships and obstacles alike) are at least ``min_start_separation`` apart;
@@ -32,6 +32,7 @@ import numpy as np
 
 from mmg_casadi.errors import InputError
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
+from mmg_casadi.montecarlo.land_sampling import ENVIRONMENT as LAND_ENVIRONMENT, sample_strait
 from mmg_casadi.params import PARAMETERS
 
 ENVIRONMENTS: dict[int, tuple[int, int]] = {1: (1, 2), 2: (2, 3), 3: (2, 5), 4: (3, 7), 5: (4, 9)}
@@ -40,8 +41,11 @@ ENVIRONMENTS: dict[int, tuple[int, int]] = {1: (1, 2), 2: (2, 3), 3: (2, 5), 4: 
 MAX_DRAWS_PER_POINT = 100_000
 """Rejection-sampling budget per point; exceeding it means the configuration leaves no room."""
 
-_ENV_ALLOWED = "an environment number in 1-5"
-_ENVS_ALLOWED = "environment numbers in 1-5 as a range '1-5', a list '1,3,5' or both '1-2,5'"
+ALL_ENVIRONMENTS: tuple[int, ...] = (*ENVIRONMENTS, LAND_ENVIRONMENT)
+"""The paper's environments 1–5 and ours, 6: a strait with islands (:mod:`mmg_casadi.montecarlo.land_sampling`)."""
+
+_ENV_ALLOWED = "an environment number in 1-6"
+_ENVS_ALLOWED = "environment numbers in 1-6 as a range '1-5', a list '1,3,6' or both '1-2,6'"
 
 
 @dataclass(frozen=True)
@@ -116,7 +120,7 @@ class SampledScenario:
     Parameters
     ----------
     environment, run, seed : int
-        Environment number (1-5), run index and the base seed the scenario was drawn with.
+        Environment number (1-6), run index and the base seed the scenario was drawn with.
     starts, goals : ndarray, shape (N, 2)
         Start and goal positions of the N ships (own ship first).
     headings : ndarray, shape (N,)
@@ -127,6 +131,8 @@ class SampledScenario:
         Centres of the static obstacles.
     obstacle_radius : float
         Radius of every static obstacle.
+    land : tuple of ndarray, shape (K, 2) each
+        Land polygons (environment 6, :mod:`mmg_casadi.montecarlo.land_sampling`); empty in environments 1–5.
 
     Examples
     --------
@@ -146,8 +152,10 @@ class SampledScenario:
     speeds: np.ndarray
     obstacles: np.ndarray
     obstacle_radius: float = 0.5
+    land: tuple = ()
 
     def __post_init__(self):
+        object.__setattr__(self, "land", tuple(_readonly(poly, (2,)) for poly in self.land))
         object.__setattr__(self, "starts", _readonly(self.starts, (2,)))
         object.__setattr__(self, "goals", _readonly(self.goals, (2,)))
         object.__setattr__(self, "headings", _readonly(self.headings, ()))
@@ -164,7 +172,9 @@ class SampledScenario:
         scalars = ("environment", "run", "seed", "obstacle_radius")
         arrays = ("starts", "goals", "headings", "speeds", "obstacles")
         return (all(getattr(self, k) == getattr(other, k) for k in scalars)
-                and all(np.array_equal(getattr(self, k), getattr(other, k)) for k in arrays))
+                and all(np.array_equal(getattr(self, k), getattr(other, k)) for k in arrays)
+                and len(self.land) == len(other.land)
+                and all(np.array_equal(a, b) for a, b in zip(self.land, other.land)))
 
     __hash__ = None
 
@@ -196,11 +206,14 @@ class SampledScenario:
             "speeds": self.speeds.tolist(),
             "obstacles": self.obstacles.tolist(),
             "obstacle_radius": float(self.obstacle_radius),
+            **({"land": [poly.tolist() for poly in self.land]} if self.land else {}),
         }
 
     def to_scenario_dict(self, method: str = DEFAULT_METHOD, dt: float = PARAMETERS["dt"].default,
                          t_max: float = PARAMETERS["t_max"].default, r_safe: float = PARAMETERS["r_safe"].default,
-                         collision_distance: float = PARAMETERS["collision_distance"].default) -> dict:
+                         collision_distance: float = PARAMETERS["collision_distance"].default,
+                         targets: str = PARAMETERS["targets"].default,
+                         target_slowdown: float = PARAMETERS["target_slowdown"].default) -> dict:
         """The scenario in the shape of a TOML scenario file, so a run can be replayed on its own.
 
         Ships are named ``agent0`` (own ship), ``agent1``, ...; headings are written in degrees; every ship
@@ -214,6 +227,12 @@ class SampledScenario:
             Time step and time limit (non-dimensional time L/U).
         r_safe, collision_distance : float
             Safe radius and collision distance in L.
+        targets : {"avoid", "hold"}
+            ``"hold"``: every ship but the own ship gets the method ``"none"`` (holds course and speed).
+        target_slowdown : float, default 0
+            Fraction of its speed every ship but the own ship takes off halfway along its route: its waypoints
+            become the midpoint and the goal, with the speeds ``[v, (1 - target_slowdown) v]`` (parameter
+            ``target_slowdown``); 0 keeps one waypoint at constant speed, the scenario unchanged.
 
         Returns
         -------
@@ -227,9 +246,17 @@ class SampledScenario:
         (['obstacles', 'settings', 'ships', 'walls'], 'modified-vortex', 'agent0', 1.0)
         >>> len(d["ships"]), d["obstacles"][0]["radius"]
         (3, 0.5)
+        >>> [s.get("method") for s in sample_scenario(1, 0).to_scenario_dict(targets="hold")["ships"]]
+        [None, 'none', 'none']
+        >>> t = sample_scenario(1, 0).to_scenario_dict(target_slowdown=0.5)["ships"][1]
+        >>> len(t["waypoints"]), t["speeds"][1] == 0.5 * t["speed"] == 0.5 * t["speeds"][0]
+        (2, True)
         """
         if not isinstance(method, str) or not method:
             raise InputError("method", "a non-empty method name", method)
+        if targets not in PARAMETERS["targets"].choices:
+            raise InputError("targets", f"one of: {', '.join(PARAMETERS['targets'].choices)}", targets)
+        target_slowdown = PARAMETERS["target_slowdown"].check(target_slowdown, cls=InputError)
         settings = {"method": method}
         for name, value in (("dt", dt), ("t_max", t_max), ("r_safe", r_safe),
                             ("collision_distance", collision_distance)):
@@ -246,9 +273,20 @@ class SampledScenario:
             }
             for i in range(self.n_ships)
         ]
+        if targets == "hold":
+            for ship in ships[1:]:
+                ship["method"] = "none"
+        if target_slowdown > 0:
+            for i, ship in enumerate(ships[1:], start=1):
+                mid = 0.5 * (self.starts[i] + self.goals[i])
+                ship["waypoints"].insert(0, [float(x) for x in mid])
+                ship["speeds"] = [ship["speed"], (1.0 - target_slowdown) * ship["speed"]]
         obstacles = [{"position": [float(x) for x in p], "radius": float(self.obstacle_radius)}
                      for p in self.obstacles]
-        return {"settings": settings, "ships": ships, "obstacles": obstacles, "walls": []}
+        out = {"settings": settings, "ships": ships, "obstacles": obstacles, "walls": []}
+        if self.land:
+            out["land"] = [{"points": poly.tolist()} for poly in self.land]
+        return out
 
 
 def _check_int(name: str, value, allowed: str, low: int = 0) -> int:
@@ -286,7 +324,8 @@ def sample_scenario(environment: int, run: int, base_seed: int = 0,
     Parameters
     ----------
     environment : int
-        Environment number, a key of :data:`ENVIRONMENTS` (1-5).
+        Environment number: a key of :data:`ENVIRONMENTS` (1-5, the paper's) or 6 (a strait with islands,
+        :func:`~mmg_casadi.montecarlo.land_sampling.sample_strait`).
     run : int
         Run index (>= 0).
     base_seed : int
@@ -302,7 +341,7 @@ def sample_scenario(environment: int, run: int, base_seed: int = 0,
     Raises
     ------
     InputError
-        If ``environment`` is not 1-5 or ``run``/``base_seed`` is not a non-negative integer.
+        If ``environment`` is not 1-6 or ``run``/``base_seed`` is not a non-negative integer.
 
     Examples
     --------
@@ -311,19 +350,22 @@ def sample_scenario(environment: int, run: int, base_seed: int = 0,
     (10, 4)
     >>> bool(np.all(np.linalg.norm(s.goals - s.starts, axis=1) >= 50))
     True
-    >>> sample_scenario(6, 0)
+    >>> sample_scenario(7, 0)
     Traceback (most recent call last):
     ...
-    mmg_casadi.errors.InputError: environment: expected an environment number in 1-5, got 6
+    mmg_casadi.errors.InputError: environment: expected an environment number in 1-6, got 7
     """
     if isinstance(environment, bool) or not isinstance(environment, (int, np.integer)) \
-            or environment not in ENVIRONMENTS:
+            or environment not in ALL_ENVIRONMENTS:
         raise InputError("environment", _ENV_ALLOWED, environment)
     environment = int(environment)
     run = _check_int("run", run, "an integer >= 0")
     base_seed = _check_int("base_seed", base_seed, "an integer >= 0")
     if not isinstance(config, SamplerConfig):
         raise InputError("config", "a SamplerConfig", type(config).__name__)
+    if environment == LAND_ENVIRONMENT:
+        return SampledScenario(**sample_strait(run, base_seed, config.speed_range),
+                               obstacle_radius=float(config.obstacle_radius))
     n_static, n_dynamic = ENVIRONMENTS[environment]
     n_ships = 1 + n_dynamic
     rng = np.random.default_rng(np.random.SeedSequence([base_seed, environment, run]))
@@ -403,7 +445,7 @@ def parse_envs(text: str) -> tuple[int, ...]:
     >>> parse_envs("0-2")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    mmg_casadi.errors.InputError: envs: expected environment numbers in 1-5 as a range '1-5', ..., got '0-2'
+    mmg_casadi.errors.InputError: envs: expected environment numbers in 1-6 as a range '1-5', ..., got '0-2'
     """
     if not isinstance(text, str) or not text.strip():
         raise InputError("envs", _ENVS_ALLOWED, text)
@@ -414,7 +456,7 @@ def parse_envs(text: str) -> tuple[int, ...]:
             raise InputError("envs", _ENVS_ALLOWED, text)
         lo = int(m.group(1))
         hi = int(m.group(2)) if m.group(2) is not None else lo
-        if lo > hi or lo not in ENVIRONMENTS or hi not in ENVIRONMENTS:
+        if lo > hi or lo not in ALL_ENVIRONMENTS or hi not in ALL_ENVIRONMENTS:
             raise InputError("envs", _ENVS_ALLOWED, text)
         envs.update(range(lo, hi + 1))
     return tuple(sorted(envs))

@@ -6,7 +6,8 @@
      "ships": [{"name", "method", "status": "reached"|"diverged"|"stalled"|"timeout",
                 "reached_goal": bool, "time_to_goal": float|null, "ce": float, "mcte": float,
                 "collided": bool, "collision_time": float|null, "collision_with": str|null,
-                "collision_kind": "ship"|"obstacle"|"wall"|null, "min_speed": float,
+                "collision_kind": "ship"|"obstacle"|"wall"|"land"|null, "collision_position": [x, y]|null,
+                "min_speed": float,
                 "reduced_speed_time": float, "delay": float|null,
                 "min_distance": float, "stalled_at": [x, y]|null, "reactive_time": float}],
      "pairs": [{"a", "b", "min_distance", "t_min", "encounter", "compliant",
@@ -22,6 +23,9 @@ risk of collision (``applicable``, ``onset``, ``release``, ``closest``, ``encoun
 ``applicable: false`` if the side never had a risk of collision. A ship's duties towards several ships are judged
 together over every ship it is paired with (all of them; in a fleet scenario those that came within R_safe), so
 conflicting duties (Rule 2(b)) are flagged.
+
+``collision_kind`` ``"land"`` is a grounding (the ship touched an edge of a land polygon ``land<k>``);
+``collision_position`` is where the ship was at its first collision or grounding.
 
 The other pair keys are the *legacy scorer*, kept unchanged for now: ``encounter``/``compliant`` are from ship
 ``a``'s side (``encounter_b``/``compliant_b`` from ``b``'s) and ``rules`` is the rule-by-rule scoring of
@@ -183,7 +187,7 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
     else:
         path = Path(scenario)
         shipped = path.suffix == ".toml" and path.parent == Path(".") and not path.exists()
-        sc = packaged_scenario(path.stem) if shipped and path.stem in _packaged_names() else load_scenario(path)
+        sc = packaged_scenario(path.stem) if shipped and path.stem in packaged_names() else load_scenario(path)
     if method is not None:
         sc = with_method(sc, method)
     problem = build_problem(sc, params)
@@ -191,14 +195,47 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
     return assess(sc, traj, problem.params, profile=profile)
 
 
-def _packaged_names() -> list[str]:
-    return sorted(p.name[:-5] for p in resources.files("mmg_casadi").joinpath("data", "scenarios").iterdir()
-                  if p.name.endswith(".toml"))
+def packaged_names() -> list[str]:
+    """Names of the scenarios shipped in ``mmg_casadi/data/scenarios/`` (file names without ``.toml``), sorted.
+
+    Examples
+    --------
+    >>> "head_on" in packaged_names()
+    True
+    """
+    return sorted(p.name[:-5] for p in _scenario_dir().iterdir() if p.name.endswith(".toml"))
+
+
+def _scenario_dir():
+    return resources.files("mmg_casadi").joinpath("data", "scenarios")
+
+
+def packaged_scenarios() -> list[dict]:
+    """What ``mmg-casadi scenarios`` lists: per shipped scenario its ``name``, number of ``ships`` and of
+    ``obstacles``, ``method`` (``settings.method``, followed by the ships that override it) and ``description``
+    (the first line of the file's header comment up to its first comma; ``""`` without one).
+
+    Examples
+    --------
+    >>> row = {r["name"]: r for r in packaged_scenarios()}["crossing"]
+    >>> row["ships"], row["description"]
+    (2, 'Crossing encounter (COLREG Rule 15)')
+    """
+    rows = []
+    for name in packaged_names():
+        sc = packaged_scenario(name)
+        own = [f"{s.name}: {s.method}" for s in sc.ships if s.method not in (None, sc.settings.method)]
+        head = _scenario_dir().joinpath(f"{name}.toml").read_text(encoding="utf-8").splitlines()
+        first = head[0].lstrip("#").strip() if head and head[0].startswith("#") else ""
+        rows.append({"name": name, "ships": len(sc.ships), "obstacles": len(sc.obstacles),
+                     "method": sc.settings.method + (f" ({', '.join(own)})" if own else ""),
+                     "description": first.split(", ")[0].rstrip(".")})
+    return rows
 
 
 def packaged_scenario(name: str) -> Scenario:
     """A scenario shipped in ``mmg_casadi/data/scenarios/<name>.toml`` (head_on, crossing, overtaking, conflict,
-    static_obstacle, narrow_channel).
+    static_obstacle, narrow_channel, ...; `mmg-casadi scenarios` lists them).
 
     Parameters
     ----------
@@ -210,10 +247,10 @@ def packaged_scenario(name: str) -> Scenario:
     >>> [s.name for s in packaged_scenario("crossing").ships]
     ['ship1', 'ship2']
     """
-    names = _packaged_names()
+    names = packaged_names()
     if name not in names:
         raise InputError("scenario", f"one of: {', '.join(names)}", name)
-    return load_scenario(resources.files("mmg_casadi").joinpath("data", "scenarios", f"{name}.toml"))
+    return load_scenario(_scenario_dir().joinpath(f"{name}.toml"))
 
 
 def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResult:
@@ -236,7 +273,9 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     names = [s.name for s in sc.ships]
     N = len(names)
     S = len(sc.obstacles)
-    agent_names = names + [f"obstacle{k}" for k in range(S)] + [f"wall{k}" for k in range(traj.layout.n_walls)]
+    n_wall = traj.layout.n_walls - traj.layout.n_land
+    agent_names = (names + [f"obstacle{k}" for k in range(S)] + [f"wall{k}" for k in range(n_wall)]
+                   + [f"land{k}" for k in range(traj.layout.n_land)])
     mask = traj.sailing_mask()
     t_end = float(traj.t[-1])
     final = np.concatenate([[t_end], traj.final.ravel()])
@@ -254,6 +293,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
             "collision_time": o["collision_time"],
             "collision_with": None if o["collision_with"] is None else agent_names[o["collision_with"]],
             "collision_kind": o["collision_kind"],
+            "collision_position": _position_at(traj, i, o["collision_time"]),
             "min_distance": o["min_distance"],
             "stalled_at": None if o["stalled_at"] is None else list(o["stalled_at"]),
             "reactive_time": o["reactive_time"],
@@ -323,6 +363,13 @@ def _encounters(traj: Trajectory, mask: np.ndarray, names: list, ship_pairs: lis
 
 REDUCED_SPEED = 0.9
 """A ship sails at reduced speed while its speed through the water is below this fraction of its planned speed."""
+
+
+def _position_at(traj, i: int, t) -> list | None:
+    """Ship ``i``'s position ``[x, y]`` (L) at time ``t`` of the trajectory (``None`` for ``t`` None)."""
+    if t is None:
+        return None
+    return [float(np.interp(t, traj.t, traj.state(name, i))) for name in ("x", "y")]
 
 
 def _speed_metrics(ship, traj: Trajectory, i: int, sailing: np.ndarray, time_to_goal, r_tol: float) -> dict:

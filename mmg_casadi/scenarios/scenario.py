@@ -21,11 +21,18 @@ times non-dimensional (L/U). A scenario file looks like::
     # stays = false              # optional: after reaching its goal the ship stays as an obstacle
     # vessel = "kcs"             # optional: the ship's hull (default the table's 'vessel')
     # speeds = [1.0]             # optional: speed on the leg to each waypoint (default: speed on every leg)
+    # length_m = 122.0           # optional: the ship's own length and beam in metres, kept as data (a file's
+    # beam_m = 20.0              #   length unit L is the hull's; these do not change the simulation)
+    # [ships.metadata]           # optional: further static data kept as is (maritime-schema names), e.g.
+    # id = 7                     #   id, mmsi, imo, shipType, sogMax, dimensions.height; written back on export
     [[obstacles]]
     position = [25.0, 0.0]
     radius = 0.5
     [[walls]]
     points = [[0.0, 5.0], [50.0, 55.0]]   # polyline; each consecutive pair of points is one wall segment
+    [[land]]
+    points = [[60.0, -5.0], [70.0, -5.0], [65.0, 5.0]]  # polygon (closed), at least 3 points; no ship starts
+                                                        # or waypoint inside; touching it is a grounding
     [environment]                # optional; calm water without it
     current_speed = 0.1          # fraction of design speed, [0, 1]
     current_direction = 90.0     # degrees, the direction the current flows TOWARDS
@@ -49,7 +56,9 @@ Every malformed entry raises one :class:`~mmg_casadi.errors.ScenarioError` whose
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import datetime
 import json
 import math
 import tomllib
@@ -68,10 +77,12 @@ SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_toleranc
 PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
 """Table parameters kept in :attr:`Settings.params`."""
 SETTINGS_KEYS = ("method",) + tuple(PARAMETERS)
-SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays", "vessel", "speeds")
+SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays", "vessel", "speeds", "length_m",
+             "beam_m", "metadata")
 OBSTACLE_KEYS = ("position", "radius")
 WALL_KEYS = ("points",)
-TOP_KEYS = ("settings", "ships", "obstacles", "walls", "environment")
+LAND_KEYS = ("points",)
+TOP_KEYS = ("settings", "ships", "obstacles", "walls", "land", "environment")
 ENVIRONMENT_KEYS = {"current_speed": "current_speed", "current_direction": "current_direction_deg",
                     "wind_speed": "wind_speed", "wind_direction": "wind_direction_deg",
                     "crab_compensation": "crab_compensation"}
@@ -184,6 +195,14 @@ class ShipSpec:
     speeds : tuple of float or None, optional
         Speed on the leg to each waypoint (fractions of the design speed); ``None``: ``speed`` on every leg. The
         closed loop orders the propeller speed of each leg's steady speed, which the engine follows.
+    length_m, beam_m : float or None, optional
+        The ship's own length and beam [m], as an imported traffic situation gives them (> 0). Data only: the
+        simulation draws every ship as the hull of length L, the scenario's length unit.
+    metadata : dict, optional
+        Further static data kept as read and written back on export (JSON-compatible values, see
+        :func:`check_metadata`): for a maritime-schema ship its ``static`` object without ``name`` and the
+        length and width, e.g. ``id``, ``mmsi``, ``shipType``, ``sogMax``, ``dimensions.height``. Left out of the
+        hash.
 
     Examples
     --------
@@ -201,12 +220,19 @@ class ShipSpec:
     stays: bool = False
     vessel: str | None = None
     speeds: tuple | None = None
+    length_m: float | None = None
+    beam_m: float | None = None
+    metadata: dict = field(default_factory=dict, hash=False)
 
     def __post_init__(self):
         object.__setattr__(self, "start", _as_point(self.start))
         object.__setattr__(self, "heading_deg", float(self.heading_deg))
         object.__setattr__(self, "speed", float(self.speed))
         object.__setattr__(self, "waypoints", _as_points(self.waypoints))
+        for name in ("length_m", "beam_m"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, float(getattr(self, name)))
+        object.__setattr__(self, "metadata", copy.deepcopy(dict(self.metadata)))
 
     @property
     def heading_rad(self) -> float:
@@ -271,6 +297,49 @@ class WallSpec:
 
 
 @dataclass(frozen=True)
+class LandSpec:
+    """Land: a polygon of at least three ``points`` (L), closed (the last point joins the first); its edges are
+    hazards a ship grounds on (:mod:`mmg_casadi.guidance.hazards`, kind ``land``).
+
+    Parameters
+    ----------
+    points : sequence of (float, float)
+        Vertices of the polygon, at least three, not all on one line (L).
+
+    Examples
+    --------
+    >>> island = LandSpec([[0, 0], [4, 0], [4, 2]])
+    >>> len(island.edges), island.contains((3.0, 1.0)), island.contains((1.0, 1.0))
+    (3, True, False)
+    """
+
+    points: tuple[tuple[float, float], ...]
+
+    def __post_init__(self):
+        object.__setattr__(self, "points", _as_points(self.points))
+
+    @property
+    def edges(self) -> tuple[tuple[tuple[float, float], tuple[float, float]], ...]:
+        """The polygon's edges as pairs of end points (L), the closing edge last."""
+        return tuple(zip(self.points, self.points[1:] + self.points[:1]))
+
+    def contains(self, point) -> bool:
+        """Whether ``point`` (x, y) lies inside the polygon (even-odd rule; a point on an edge may go either way).
+
+        Parameters
+        ----------
+        point : (float, float)
+            The point (L).
+        """
+        x, y = float(point[0]), float(point[1])
+        inside = False
+        for (ax, ay), (bx, by) in self.edges:
+            if (ay > y) != (by > y) and x < ax + (y - ay) * (bx - ax) / (by - ay):
+                inside = not inside
+        return inside
+
+
+@dataclass(frozen=True)
 class Scenario:
     """A whole scenario (tuples throughout, so a scenario is hashable).
 
@@ -284,6 +353,8 @@ class Scenario:
         Static circular obstacles.
     walls : sequence of WallSpec
         Channel walls.
+    land : sequence of LandSpec
+        Land polygons.
 
     Examples
     --------
@@ -296,9 +367,10 @@ class Scenario:
     ships: tuple[ShipSpec, ...]
     obstacles: tuple[ObstacleSpec, ...] = ()
     walls: tuple[WallSpec, ...] = ()
+    land: tuple[LandSpec, ...] = ()
 
     def __post_init__(self):
-        for name in ("ships", "obstacles", "walls"):
+        for name in ("ships", "obstacles", "walls", "land"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
 
     def method_of(self, i: int) -> str:
@@ -456,6 +528,67 @@ def _environment(d: dict, settings: dict) -> dict:
     return out
 
 
+_METADATA = "a string, a finite number, true or false, an array or a table of these (values with a JSON form)"
+_INT64 = (-(2 ** 63), 2 ** 63 - 1)
+
+
+def check_metadata(value, key: str, *, drop_nulls: bool = False) -> dict:
+    """``value`` as a metadata table: nested tables and arrays of strings, finite numbers and booleans.
+
+    The values that both a scenario file (TOML) and a traffic situation (JSON) can hold: no null, datetime or
+    non-finite number, integers in the 64-bit range of TOML.
+
+    Parameters
+    ----------
+    value : dict
+        The table to check (a :attr:`ShipSpec.metadata`).
+    key : str
+        Dotted name of the table, e.g. ``"ships[1].metadata"``; an error names the offending entry under it.
+    drop_nulls : bool, optional
+        Leave out table entries whose value is None (JSON null) instead of refusing them.
+
+    Returns
+    -------
+    dict
+        A deep copy of ``value``.
+
+    Examples
+    --------
+    >>> check_metadata({"mmsi": 257000123, "dimensions": {"height": 8.0}}, "ships[0].metadata")
+    {'mmsi': 257000123, 'dimensions': {'height': 8.0}}
+    >>> check_metadata({"sogMax": float("nan")}, "ships[0].metadata")
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.ScenarioError: ships[0].metadata.sogMax: expected a string, a finite number, true or false, an array or a table of these (values with a JSON form), got nan
+    """
+    def plain(v, k):
+        if isinstance(v, dict):
+            out = {}
+            for name, item in v.items():
+                if not isinstance(name, str):
+                    raise ScenarioError(k, "a table with string keys", name)
+                if item is not None or not drop_nulls:
+                    out[name] = plain(item, f"{k}.{toml_key(name)}")
+            return out
+        if isinstance(v, list):
+            return [plain(item, f"{k}[{j}]") for j, item in enumerate(v)]
+        if isinstance(v, (str, bool)):
+            return v
+        if isinstance(v, int) and _INT64[0] <= v <= _INT64[1]:
+            return v
+        if isinstance(v, float) and math.isfinite(v):
+            return v
+        shown = v.isoformat() if isinstance(v, (datetime.date, datetime.time)) else v
+        raise ScenarioError(k, _METADATA, shown)
+
+    if not isinstance(value, dict):
+        raise ScenarioError(key, "a table of static data", value)
+    try:
+        return plain(value, key)
+    except RecursionError:
+        raise ScenarioError(key, "tables and arrays nested less deeply (Python's recursion limit)") from None
+
+
 def _ship(t: dict, i: int) -> ShipSpec:
     """Validated ``ships[i]`` table."""
     p = f"ships[{i}]"
@@ -479,7 +612,11 @@ def _ship(t: dict, i: int) -> ShipSpec:
         if not isinstance(t["speeds"], list) or len(t["speeds"]) != len(waypoints):
             raise ScenarioError(f"{p}.speeds", allowed, t["speeds"])
         speeds = tuple(_ranged(v, f"{p}.speeds[{k}]", lo, hi, unit=unit) for k, v in enumerate(t["speeds"]))
-    return ShipSpec(name, start, heading, speed, waypoints, method, stays, vessel, speeds)
+    size = {k: _ranged(t[k], f"{p}.{k}", 0.0, None, low_open=True, unit="m") for k in ("length_m", "beam_m")
+            if k in t}
+    metadata = check_metadata(t["metadata"], f"{p}.metadata") if "metadata" in t else {}
+    return ShipSpec(name, start, heading, speed, waypoints, method, stays, vessel, speeds, metadata=metadata,
+                    **size)
 
 
 def _obstacle(t: dict, i: int) -> ObstacleSpec:
@@ -499,6 +636,33 @@ def _wall(t: dict, i: int) -> WallSpec:
         if points[j] == points[j - 1]:
             raise ScenarioError(f"{key}[{j}]", "a point different from the previous one", list(points[j]))
     return WallSpec(points)
+
+
+def _land(t: dict, i: int) -> LandSpec:
+    """Validated ``land[i]`` table: at least three points, consecutive ones distinct, a non-zero area."""
+    key = f"land[{i}].points"
+    points = _points(_required(t, "points", f"land[{i}]", "a list of at least 3 points"), key, 3)
+    for j in range(len(points)):
+        if points[j] == points[j - 1]:
+            raise ScenarioError(f"{key}[{j}]", "a point different from the previous one", list(points[j]))
+    area = 0.5 * sum(a[0] * b[1] - b[0] * a[1] for a, b in zip(points, points[1:] + points[:1]))
+    if abs(area) < 1e-9:
+        raise ScenarioError(key, "a polygon with a non-zero area (not all points on one line)",
+                            [list(p) for p in points])
+    return LandSpec(points)
+
+
+def _check_water(ships, land) -> None:
+    """No ship starts, and no waypoint lies, on land."""
+    for k, poly in enumerate(land):
+        for i, ship in enumerate(ships):
+            if poly.contains(ship.start):
+                raise ScenarioError(f"ships[{i}].start", f"a point outside land[{k}] (ships start in water)",
+                                    list(ship.start))
+            for j, wp in enumerate(ship.waypoints):
+                if poly.contains(wp):
+                    raise ScenarioError(f"ships[{i}].waypoints[{j}]", f"a point outside land[{k}] (a route "
+                                        "goes through water)", list(wp))
 
 
 def _check_starts(ships, obstacles, collision_distance: float) -> None:
@@ -551,11 +715,13 @@ def scenario_from_dict(d: dict, source: str = "<dict>") -> Scenario:
         obstacles = tuple(_obstacle(t, i) for i, t in
                           enumerate(_tables(table, "obstacles", OBSTACLE_KEYS, required=False)))
         walls = tuple(_wall(t, i) for i, t in enumerate(_tables(table, "walls", WALL_KEYS, required=False)))
+        land = tuple(_land(t, i) for i, t in enumerate(_tables(table, "land", LAND_KEYS, required=False)))
         _check_starts(ships, obstacles, settings.collision_distance)
+        _check_water(ships, land)
     except ScenarioError as err:
         err.source = source
         raise
-    return Scenario(settings, ships, obstacles, walls)
+    return Scenario(settings, ships, obstacles, walls, land)
 
 
 def load_scenario(path) -> Scenario:
@@ -588,7 +754,7 @@ def load_scenario(path) -> Scenario:
         raise ScenarioError("toml", f"UTF-8 text in {path}", str(err)) from None
     try:
         d = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
+    except (tomllib.TOMLDecodeError, RecursionError) as err:  # RecursionError: arrays nested too deep
         raise ScenarioError("toml", f"valid TOML in {path}", str(err)) from None
     return scenario_from_dict(d, source=str(path))
 
@@ -649,6 +815,11 @@ def _ship_dict(ship: ShipSpec) -> dict:
         d["vessel"] = ship.vessel
     if ship.speeds is not None:
         d["speeds"] = list(ship.speeds)
+    for k in ("length_m", "beam_m"):
+        if getattr(ship, k) is not None:
+            d[k] = getattr(ship, k)
+    if ship.metadata:
+        d["metadata"] = copy.deepcopy(ship.metadata)
     return d
 
 
@@ -677,13 +848,14 @@ def scenario_to_dict(s: Scenario) -> dict:
         "ships": [_ship_dict(ship) for ship in s.ships],
         "obstacles": [{"position": list(ob.position), "radius": ob.radius} for ob in s.obstacles],
         "walls": [{"points": [list(p) for p in w.points]} for w in s.walls],
+        "land": [{"points": [list(p) for p in a.points]} for a in s.land],
     }
 
 
 def dump_scenario(s: Scenario) -> str:
     """``s`` as scenario-file TOML text; ``scenario_from_dict(tomllib.loads(dump_scenario(s))) == s``.
 
-    :func:`scenario_to_dict` without its empty ``obstacles`` and ``walls``, written by ``tomli_w.dumps``.
+    :func:`scenario_to_dict` without its empty ``obstacles``, ``walls`` and ``land``, written by ``tomli_w.dumps``.
 
     Parameters
     ----------
