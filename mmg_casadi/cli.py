@@ -6,7 +6,8 @@ takes the same parameter options: ``--params FILE`` (a TOML file of parameters, 
 
 Bad input (unknown command or option, value out of range, malformed scenario or parameter file) prints one line
 naming the field and the allowed values and exits with status 2; nothing is written in that case. An option the
-chosen command does not use is refused the same way.
+chosen command does not use is refused the same way. A study that cannot finish (a Ray batch whose worker died
+more often than Ray retries it) prints one line and exits with status 1; its finished runs are kept.
 """
 
 from __future__ import annotations
@@ -18,22 +19,25 @@ import sys
 import tomllib
 from pathlib import Path
 
-from mmg_casadi.errors import InputError
+from mmg_casadi.errors import InputError, RunError
 from mmg_casadi.guidance import methods as registry
-from mmg_casadi.io import write_json, write_text
-from mmg_casadi.limits import MAX_SHIPS, check_runs
+from mmg_casadi.io import check_output, write_json, write_text
+from mmg_casadi.limits import MAX_SHIPS, check_runs, check_steps
 from mmg_casadi.montecarlo.disturbance_sampling import parse_range
 from mmg_casadi.montecarlo.sampling import parse_envs, sample_traffic
 from mmg_casadi.params import PARAMETERS, check_value, help_text, load_file, markdown_table
+from mmg_casadi.scenarios.ais_replay import ais_scenario, load_ais_csv
+from mmg_casadi.scenarios.generate import generate, load_description, override, standard_description, write_set
 from mmg_casadi.scenarios.interchange import convert_file
 from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
-from mmg_casadi.scenarios.run import run_scenario
+from mmg_casadi.scenarios.run import packaged_names, packaged_scenario, packaged_scenarios, run_scenario
 from mmg_casadi.scenarios.scenario import dump_scenario, load_scenario, scenario_from_dict, with_method
 from mmg_casadi.signals import exit_status, signal_name, terminate_as_interrupt
+from mmg_casadi.vessel.library import load_vessel, vessel_table
 from mmg_casadi.vessel.maneuvers import speed_change, turning_circle, validate_maneuver_args, zigzag
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
-STUDIES = QUICK_STUDIES + ("imazu", "disturbance", "statistics", "sweep", "paper", "all")
+STUDIES = QUICK_STUDIES + ("land", "imazu", "encounters", "disturbance", "statistics", "sweep", "paper", "all")
 _FLAGS = {"base_seed": "--seed", "out_dir": "--out"}
 """Library argument names whose flag is not ``--`` + the name with dashes."""
 
@@ -64,8 +68,17 @@ def _int(s):
         raise argparse.ArgumentTypeError(f"expected an integer, got {s!r}") from None
 
 
+def _path(s):
+    if "\0" in s:  # the operating system takes no NUL in a path; Python raises ValueError on opening one
+        raise argparse.ArgumentTypeError(f"expected a path without NUL characters, got {s!r}")
+    return Path(s)
+
+
 def _methods(s):
-    return registry.parse_list(s, "--methods")
+    try:
+        return registry.parse_list(s, "--methods")
+    except InputError as e:  # argparse reports a type error as "argument --methods: <message>"
+        raise argparse.ArgumentTypeError(f"expected {e.allowed}, got {e.got!r}") from None
 
 
 def _setting(s: str) -> tuple[str, object]:
@@ -76,13 +89,13 @@ def _setting(s: str) -> tuple[str, object]:
         raise InputError("--set", "NAME=VALUE with NAME a parameter (see `mmg-casadi params`)", s)
     try:
         value = tomllib.loads(f"v = {text.strip()}")["v"]
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError):  # not a TOML value (or nested too deep): a bare word
         value = text.strip()
     return name, check_value(name, value, field=f"--set {name}", cls=InputError)
 
 
 def _add_params(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--params", type=Path, help="TOML file of parameters (e.g. params.toml from `tune apf`); "
+    p.add_argument("--params", type=_path, help="TOML file of parameters (e.g. params.toml from `tune apf`); "
                    "see `mmg-casadi params`")
     p.add_argument("--set", dest="settings", action="append", default=[], metavar="NAME=VALUE",
                    help="one parameter (repeatable; wins over --params), e.g. --set r_safe=10")
@@ -97,7 +110,8 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``mmg-casadi`` argument parser (one sub-parser per command, study and tuning)."""
     p = _Parser(prog="mmg-casadi", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", parser_class=_Parser,
-                           metavar="{maneuver,simulate,study,tune,convert,traffic,params}")
+                           metavar="{maneuver,vessels,identify,simulate,scenarios,study,tune,convert,traffic,"
+                                   "generate,replay,params}")
     sub.required = True
 
     m = sub.add_parser("maneuver", help="standard manoeuvres: turning circle, zig-zag, speed change")
@@ -108,13 +122,28 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--speed", type=_float, default=1.0, help="approach speed / design speed, [0.2, 1.2]")
     m.add_argument("--to-speed", type=_float, default=None,
                    help="speed change: the new speed / design speed, [0.2, 1.2] (default 0.5)")
-    m.add_argument("--out", type=Path, required=True, help="output directory")
+    m.add_argument("--vessel", default="kcs", help="hull: a name of `mmg-casadi vessels` or a vessel .toml file "
+                   "(default kcs)")
+    m.add_argument("--out", type=_path, required=True, help="output directory")
 
-    s = sub.add_parser("simulate", help="run a scenario file")
-    s.add_argument("file", type=Path, help="scenario TOML file or maritime-schema traffic situation (.json)")
+    sub.add_parser("vessels", help="list the hulls of the vessel library (particulars, design speed, source)")
+
+    idf = sub.add_parser("identify", help="fit MMG coefficients of a vessel to a measured time series")
+    idf.add_argument("data", type=_path, help="CSV with columns t, u, v, r, psi, delta, rpm (SI: s, m/s, rad/s, "
+                     "rad, rad, rev/min); an integer column 'run' separates experiments")
+    idf.add_argument("--vessel", default="kcs", help="base hull: a name of `mmg-casadi vessels` or a vessel .toml "
+                     "file (default kcs)")
+    idf.add_argument("--free", required=True, help="comma-separated coefficients to fit, e.g. Yb,Nb,Nr")
+    idf.add_argument("--out", type=_path, required=True, help="output directory (vessel TOML and report)")
+
+    s = sub.add_parser("simulate", help="run a scenario file or a packaged scenario by name")
+    s.add_argument("file", type=_path, help="scenario TOML file, maritime-schema traffic situation (.json) or the "
+                   "name of a packaged scenario (see `mmg-casadi scenarios`), e.g. head_on")
     s.add_argument("--method", help=f"override settings.method: {', '.join(registry.NAMES)}")
     _add_params(s)
-    s.add_argument("--out", type=Path, required=True, help="output directory")
+    s.add_argument("--out", type=_path, required=True, help="output directory")
+
+    sub.add_parser("scenarios", help="list the packaged scenarios (name, ships, method, description)")
 
     st = sub.add_parser("study", help="the paper's studies")
     studies = st.add_subparsers(dest="study", parser_class=_Parser, metavar="{" + ",".join(STUDIES) + "}")
@@ -122,7 +151,7 @@ def build_parser() -> argparse.ArgumentParser:
     for name in STUDIES:
         sp = studies.add_parser(name, help={"all": "every quick study", "paper": "every study of the paper and "
                                             "a claim-by-claim report"}.get(name, f"the {name} study"))
-        sp.add_argument("--out", type=Path, required=True, help="output directory")
+        sp.add_argument("--out", type=_path, required=True, help="output directory")
         _add_params(sp)
         if name not in ("waypoint-square", "all", "paper"):
             _add_methods(sp)
@@ -138,6 +167,11 @@ def build_parser() -> argparse.ArgumentParser:
         if name == "imazu":
             sp.add_argument("--targets", default="both", help="hold | avoid | both: the targets hold course and "
                             "speed, avoid with the own ship's method, or both in turn")
+        if name == "encounters":
+            sp.add_argument("set_dir", type=_path, metavar="SET_DIR", help="directory of scenario files (*.toml), "
+                            "e.g. written by `mmg-casadi generate`")
+            sp.add_argument("--targets", default="hold", help="hold | avoid: the targets hold course and speed "
+                            "(default) or avoid with the own ship's method")
         if name == "disturbance":
             sp.add_argument("--current", type=_float, default=0.1, help="beam current speed (fraction of design "
                             "speed), default 0.1")
@@ -153,6 +187,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "(fraction of design speed, direction uniform), e.g. 0-0.1")
             sp.add_argument("--wind", default=None, metavar="LO-HI", help="per-run true wind speed range (m/s, "
                             "direction uniform), e.g. 0-15")
+            sp.add_argument("--targets", default=None, help="avoid | hold: the sampled target ships avoid with "
+                            "the study's method (default) or hold course and speed (same as --set targets=VALUE)")
         if name == "sweep":
             sp.add_argument("--param", required=True, help="the swept parameter (see `mmg-casadi params`)")
             sp.add_argument("--values", required=True, help="comma-separated values, e.g. 10,15,20,25")
@@ -173,7 +209,7 @@ def build_parser() -> argparse.ArgumentParser:
     tp.add_argument("--tracking-tolerance", dest="tracking_tolerance", type=_float, default=0.0,
                     help="recommended gains may track the waypoint square this much worse (relative CE, MCTE) "
                     "than the paper's gains (default 0)")
-    tp.add_argument("--out", type=Path, required=True, help="output directory")
+    tp.add_argument("--out", type=_path, required=True, help="output directory")
     ta = tunes.add_parser("apf", help="gradient-based tuning of the modified sink-vortex field")
     ta.add_argument("--train", type=_int, default=195, help="sampled training scenarios, environments 3-5 "
                     "(plus the paper's five)")
@@ -184,11 +220,11 @@ def build_parser() -> argparse.ArgumentParser:
     ta.add_argument("--max-iter", dest="max_iter", type=_int, default=8, help="L-BFGS-B iterations per start")
     ta.add_argument("--workers", type=_int, default=None, help="worker processes of the held-out study")
     _add_params(ta)
-    ta.add_argument("--out", type=Path, required=True, help="output directory")
+    ta.add_argument("--out", type=_path, required=True, help="output directory")
 
     c = sub.add_parser("convert", help="maritime-schema traffic situation (.json) <-> scenario file (.toml)")
-    c.add_argument("file", type=Path, help="input .json (maritime-schema) or .toml (scenario)")
-    c.add_argument("--out", type=Path, required=True, help="output .toml or .json")
+    c.add_argument("file", type=_path, help="input .json (maritime-schema) or .toml (scenario)")
+    c.add_argument("--out", type=_path, required=True, help="output .toml or .json")
     c.add_argument("--method", default=registry.DEFAULT, help="json->toml: the own ship's method")
     c.add_argument("--target-method", default="none", help="json->toml: the target ships' method")
     c.add_argument("--length-scale", default="kcs", help="json->toml: kcs (230 m) | own-ship")
@@ -200,7 +236,23 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--seed", type=int, default=0, help="seed of the generator")
     tr.add_argument("--method", default=registry.DEFAULT, help="every ship's method")
     tr.add_argument("--t-max", type=float, default=PARAMETERS["t_max"].default, help="horizon [L/U]")
-    tr.add_argument("--out", type=Path, required=True, help="output scenario file (.toml)")
+    tr.add_argument("--out", type=_path, required=True, help="output scenario file (.toml)")
+
+    ge = sub.add_parser("generate", help="standard encounter sets: situations with targets in requested COLREG "
+                        "encounters, as scenario files and maritime-schema traffic situations")
+    ge.add_argument("description", nargs="?", type=_path, default=None, help="description file (.toml); default: "
+                    "the shipped standard set (110 situations, one to three targets)")
+    ge.add_argument("--situations", type=_int, default=None, help="number of situations (replaces set.situations)")
+    ge.add_argument("--seed", type=_int, default=None, help="seed of the set (replaces set.seed)")
+    ge.add_argument("--out", type=_path, required=True, help="output directory")
+
+    rp = sub.add_parser("replay", help="AIS tracks (.csv) as a scenario file: the targets retrace their recorded "
+                        "routes, the own ship sails hers with a method")
+    rp.add_argument("file", type=_path, help="CSV of AIS reports with the columns mmsi, time, lat, lon")
+    rp.add_argument("--own", required=True, help="MMSI of the own ship")
+    rp.add_argument("--step", type=_float, default=60.0, help="resampling step of the routes [s] (default 60)")
+    rp.add_argument("--method", default=registry.DEFAULT, help="the own ship's method")
+    rp.add_argument("--out", type=_path, required=True, help="output scenario file (.toml)")
 
     pp = sub.add_parser("params", help="list every parameter (default, allowed values, unit, meaning, source)")
     pp.add_argument("--markdown", action="store_true", help="as a Markdown table")
@@ -214,7 +266,17 @@ def _params_of(a) -> dict | None:
         if getattr(a, key, None) is not None and getattr(a, "study", None) == "waypoint-square":
             out[key] = check_value(key, getattr(a, key), field="--" + key.replace("_", "-"), cls=InputError)
     out.update(dict(_setting(s) for s in getattr(a, "settings", [])))
+    if getattr(a, "study", None) == "statistics" and a.targets is not None:
+        out["targets"] = check_value("targets", a.targets, field="--targets", cls=InputError)
+    for key in ("targets", "target_slowdown"):
+        if key in out and (a.command, getattr(a, "study", None)) not in _TARGETS_APPLY:
+            raise InputError(key, "nothing outside `study statistics` and `study sweep` (it sets what their "
+                             "sampled target ships do)", out[key])
     return out or None
+
+
+_TARGETS_APPLY = {("study", "statistics"), ("study", "sweep")}
+"""Commands whose sampled scenarios read the parameters ``targets`` and ``target_slowdown``."""
 
 
 def _maneuver(a) -> dict:
@@ -222,16 +284,20 @@ def _maneuver(a) -> dict:
     validate_maneuver_args(a.kind)
     if a.to_speed is not None and a.kind != "speed":
         raise InputError("--to-speed", "only with the 'speed' manoeuvre", a.to_speed)
+    v = load_vessel(a.vessel)
+    hull = {"ship": v.ship, "steering": v.steering}
     if a.kind == "speed":
         to = 0.5 if a.to_speed is None else a.to_speed
-        r = speed_change(to, speed=a.speed)
+        r = speed_change(to, speed=a.speed, **hull)
         name = f"speed_{a.speed:g}_to_{to:g}"
     elif a.kind == "turning":
-        r = turning_circle(a.rudder, port=a.port, speed=a.speed)
+        r = turning_circle(a.rudder, port=a.port, speed=a.speed, **hull)
         name = f"turning_{a.rudder:g}_{'port' if a.port else 'starboard'}"
     else:
-        r = zigzag(a.angle, speed=a.speed)
+        r = zigzag(a.angle, speed=a.speed, **hull)
         name = f"zigzag_{a.angle:g}"
+    if a.vessel != "kcs":
+        r.metrics["vessel"] = v.name
     a.out.mkdir(parents=True, exist_ok=True)
     plot_maneuver(r, a.out / f"{name}.png")
     write_json(a.out / "metrics.json", r.metrics)
@@ -242,6 +308,12 @@ def _maneuver(a) -> dict:
 def _simulate(a) -> dict:
     if a.file.suffix.lower() == ".json":
         sc = load_traffic_situation(a.file)[0]
+    elif not a.file.exists() and a.file.parent == Path(".") and (not a.file.suffix or (
+            a.file.suffix == ".toml" and a.file.stem in packaged_names())):  # a packaged scenario, as run_scenario
+        try:
+            sc = packaged_scenario(a.file.stem if a.file.suffix else str(a.file))
+        except InputError as e:
+            raise InputError("scenario", f"a scenario file or a packaged scenario, {e.allowed}", e.got) from None
     else:
         sc = load_scenario(a.file)
     if a.method:
@@ -273,6 +345,8 @@ def _study(a) -> dict:
             kw.update(current=a.current, wind=a.wind)
         if n == "imazu":
             kw.update(targets=a.targets)
+        if n == "encounters":
+            kw.update(set_dir=a.set_dir, targets=a.targets)
         if n == "paper":
             kw.update(runs=a.runs, base_seed=a.seed, workers=a.workers)
         if n == "sweep":
@@ -287,7 +361,10 @@ def _tune(a) -> dict:
         from tuning import cli_pd  # python-control and the tuning stack: only for 'tune'
         return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn, tracking_tolerance=a.tracking_tolerance)
     from tuning import cli_apf  # the tuning stack: only for 'tune'
-    envs = tuple(parse_envs(a.holdout_envs))
+    try:
+        envs = tuple(parse_envs(a.holdout_envs))
+    except InputError as e:
+        raise InputError("--holdout-envs", e.allowed, e.got) from None
     return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a), envs=envs,
                        target=(5,) if 5 in envs else envs[-1:], starts=a.starts, grid=a.grid,
                        max_iter=a.max_iter, workers=a.workers)
@@ -298,22 +375,91 @@ def _convert(a) -> dict:
                         length_scale=a.length_scale, reference=a.reference)
 
 
+def _generate(a) -> dict:
+    d = standard_description() if a.description is None else load_description(a.description)
+    es = generate(override(d, situations=a.situations, seed=a.seed))
+    write_set(es, a.out)
+    st = es.stats
+    print(f"{a.out}: {len(es.situations)} situations from {d.source}; {st['accepted']}/{st['checked']} classified "
+          f"situations passed the encounter check ({100 * st['acceptance_share']:.1f} %)")
+    return st
+
+
+def _replay(a) -> dict:
+    if a.out.suffix.lower() != ".toml":
+        raise InputError("--out", "a scenario file name ending in .toml", str(a.out))
+    sc, report = ais_scenario(load_ais_csv(a.file), a.own, step_s=a.step, method=a.method)
+    write_text(a.out, dump_scenario(sc))
+    gone = ", ".join(f"{k} ({v})" for k, v in report["left_out"].items())
+    print(f"{a.out}: {len(sc.ships)} ships over {report['duration']:g} s" + (f"; left out: {gone}" if gone else "")
+          + (f"; {report['clipped_legs']} legs clipped to the allowed speeds" if report["clipped_legs"] else ""))
+    return report
+
+
 def _traffic(a) -> dict:
     if a.out.suffix.lower() != ".toml":
         raise InputError("--out", "a scenario file name ending in .toml", str(a.out))
-    if a.ships > MAX_SHIPS:
+    if not 1 <= a.ships <= MAX_SHIPS:
         raise InputError("ships", f"an integer in [1, {MAX_SHIPS}] (MAX_SHIPS)", a.ships)
+    if a.seed < 0:
+        raise InputError("--seed", "an integer >= 0", a.seed)
     registry.get(a.method, "--method")
     check_value("t_max", a.t_max, field="--t-max", cls=InputError)
+    check_steps(a.t_max, PARAMETERS["dt"].default, cls=InputError, ships=a.ships)  # simulate would refuse it
     sc = scenario_from_dict(sample_traffic(a.ships, a.seed).to_scenario_dict(method=a.method, t_max=a.t_max))
     write_text(a.out, dump_scenario(sc))
     print(f"{a.out}: {len(sc.ships)} ships, {len(sc.obstacles)} obstacles")
     return {"ships": len(sc.ships), "obstacles": len(sc.obstacles)}
 
 
+def _scenarios(a) -> list[dict]:
+    rows = packaged_scenarios()
+    head = {k: k for k in ("name", "ships", "obstacles", "method", "description")}
+    width = {k: max(len(str(r[k])) for r in [head, *rows]) for k in head}
+    for r in [head, *rows]:
+        print("  ".join(str(r[k]).ljust(width[k]) for k in head).rstrip())
+    return rows
+
+
+def _vessels(a) -> list[dict]:
+    rows = vessel_table()
+    cols = {"name": "{}", "L_m": "{:g}", "B_m": "{:g}", "d_m": "{:g}", "U_design_kn": "{:.1f}",
+            "rpm_design": "{:.1f}", "hull_form": "{}", "source": "{}"}
+    head = {"name": "name", "L_m": "L [m]", "B_m": "B [m]", "d_m": "d [m]", "U_design_kn": "U design [kn]",
+            "rpm_design": "rpm", "hull_form": "form", "source": "source"}
+    cells = [head] + [{k: f.format(r[k]) for k, f in cols.items()} for r in rows]
+    width = {k: max(len(c[k]) for c in cells) for k in cols}
+    for c in cells:
+        print("  ".join(c[k].ljust(width[k]) for k in cols).rstrip())
+    return rows
+
+
+def _identify(a) -> dict:
+    from mmg_casadi.identify import identify_to_dir  # IPOPT: only for this command
+    res = identify_to_dir(a.data, a.vessel, [n.strip() for n in a.free.split(",") if n.strip()], a.out)
+    print(json.dumps(res["summary"], indent=1, ensure_ascii=False))
+    return res
+
+
 def _params(a) -> dict:
     print(markdown_table() if a.markdown else help_text())
     return {n: p.default for n, p in PARAMETERS.items()}
+
+
+_FILE_OUTPUT = ("convert", "traffic", "replay")
+"""Commands whose ``--out`` is a file (the others write into a directory)."""
+
+
+def _check_out(a) -> None:
+    """Refuse an ``--out`` that cannot be written before any work (:func:`mmg_casadi.io.check_output`)."""
+    if getattr(a, "out", None) is not None:
+        check_output(a.out, kind="file" if a.command in _FILE_OUTPUT else "dir", field="--out")
+
+
+def _resumable(a) -> bool:
+    """Whether the parsed command resumes from the files it has written when it is run again."""
+    return (a is not None and (a.command, getattr(a, "study", None) or getattr(a, "what", None)) in
+            {("study", "statistics"), ("study", "sweep"), ("study", "paper"), ("tune", "apf")})
 
 
 def _flag(field: str, a) -> str:
@@ -341,8 +487,11 @@ def main(argv=None) -> int:
                 prog = "mmg-casadi " + " ".join(x for x in (a.command, getattr(a, "study", None),
                                                              getattr(a, "what", None)) if x)
                 raise InputError(extra[0], f"an option of '{prog}' (see '{prog} --help')")
+            _check_out(a)
             handlers = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
-                        "convert": _convert, "traffic": _traffic, "params": _params}
+                        "convert": _convert, "traffic": _traffic, "generate": _generate, "replay": _replay,
+                        "params": _params,
+                        "scenarios": _scenarios, "vessels": _vessels, "identify": _identify}
             handlers[a.command](a)
     except _CliError as e:
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
@@ -352,9 +501,13 @@ def main(argv=None) -> int:
             e = InputError(_flag(e.field, a), e.allowed, e.got)
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
         return 2
+    except RunError as e:
+        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt as e:
-        print(f"mmg-casadi: interrupted by {signal_name(e)} (finished results are kept; rerun the same command "
-              "to resume)", file=sys.stderr)
+        what = ("finished results are kept; rerun the same command to resume" if _resumable(a) else
+                "this command does not resume: rerun it to start again")
+        print(f"mmg-casadi: interrupted by {signal_name(e)} ({what})", file=sys.stderr)
         return exit_status(e)
     return 0
 

@@ -225,21 +225,28 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("cv_theta_head_on_deg", 22.5, 0.0, 90.0, "deg", "head-on tolerance on the bearing and on the course "
        "difference from reciprocal", "the paper laboratory's head-on sector 7π/8–9π/8 of relative heading",
        "colregs-vortex", low_open=True, high_open=True),
-    _P("cv_d_cpa_act", 3.0, 0.0, None, "L", "the stand-on ship acts alone when its planned-course CPA distance is "
-       "below this (Rule 17(a)(ii))", "our choice: 1.5 × the 2 L collision distance, below the ≈ 4 L the modified "
+    _P("cv_d_cpa_act", 3.0, 0.0, None, "L", "the stand-on ship acts alone when its passing distance at the present "
+       "velocities is below this (Rule 17(a)(ii))", "our choice: 1.5 × the 2 L collision distance, below the ≈ 4 L the modified "
        "vortex's give-way action aims at", "colregs-vortex", low_open=True),
-    _P("cv_t_act", 7.0, 0.0, None, "L/U", "TCPA below which the stand-on ship acts alone (Rule 17(a)(ii))",
-       "our choice: ≈ 2.2 min for the KCS, twice a give-way ship's time to alter 30° after entering R_safe",
-       "colregs-vortex", low_open=True),
-    _P("cv_r_act", 8.0, 0.0, None, "L", "range below which the stand-on ship acts alone whatever the TCPA (slowly "
-       "closing overtakers)", "our choice: 4 collision distances", "colregs-vortex", low_open=True),
+    _P("cv_t_act", 4.0, 0.0, None, "L/U", "TCPA below which the give-way ship's inaction is apparent and the "
+       "stand-on ship acts alone (Rule 17(a)(ii))", "Cockcroft & Lameijer, A Guide to the Collision Avoidance "
+       "Rules, 7th ed., on Rule 17: in open sea a give-way ship that has not acted by about 2 nm in a crossing of "
+       "two merchant ships has usually waited too long, i.e. when a substantial alteration no longer completes "
+       "well before the CPA; for the KCS a 60° alteration takes 3.7 L/U (≈ 75 s at 4 L/U)", "colregs-vortex",
+       low_open=True),
+    _P("cv_r_act", 8.0, 0.0, None, "L", "range below which the overtaken ship acts alone whatever the TCPA (slowly "
+       "closing overtakers), and within which a stand-on ship keeping her course circles a static obstacle", "our choice: 4 collision distances", "colregs-vortex", low_open=True),
     _P("cv_t_close", 3.0, 0.0, None, "L/U", "TCPA at which the stand-on action reaches full strength (Rule 17(b))",
        "our choice: about the KCS's 90° turn time with full rudder", "colregs-vortex", low_open=True),
     _P("cv_k_standon", 1.0, 0.0, None, "L/(L/U)", "strength of the stand-on escape term at the trigger",
        "our choice: the paper's sink (Λ = −100) at the 15 L detection range", "colregs-vortex", low_open=True),
-    _P("cv_dpsi_min_deg", 30.0, 0.0, 90.0, "deg", "smallest alteration from the goal bearing while a threat is "
-       "present (Rule 8, readily apparent)", "NTNU evaluator's Δχ_app (Hagen et al. 2023 configuration)",
+    _P("cv_dpsi_min_deg", 30.0, 0.0, 90.0, "deg", "smallest alteration from the heading at the onset of a give-way "
+       "duty or of the stand-on action (Rule 8, readily apparent)", "NTNU evaluator's Δχ_app (Hagen et al. 2023 configuration)",
        "colregs-vortex"),
+    _P("cv_d_risk", 4.0, 0.0, None, "L", "risk of collision (Rule 7), the onset of an encounter: a ship within R_safe "
+       "whose straight-line passing distance at the present velocities is below this while the range closes",
+       "our choice: twice the paper's 2 L collision distance (§Statistical Analysis), a passing with less than one "
+       "collision distance of clearance, as the iitm-lab scoring profile's gate", "colregs-vortex", low_open=True),
     _P("cv_d_clear", 6.0, 0.0, None, "L", "a give-way ship holds its alteration until the planned-course passing "
        "distance exceeds this", "our choice: 3 collision distances", "colregs-vortex", low_open=True),
     _P("cv_v_ship_min", 0.05, 0.0, None, "U", "slower neighbours are static obstacles without a COLREG role",
@@ -261,6 +268,10 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("cv_dpsi_cq_deg", 45.0, 0.0, 180.0, "deg", "the filter judges the heading the ship turns through next, at most "
        "this far from its own on the way to the field's", "our choice: about the KCS's turn in half of cv_t_close; "
        "beyond 10° of heading error the PD's rudder is saturated anyway", "colregs-vortex", low_open=True),
+    _P("cv_speed_cut", 0.5, 0.0, 1.0, "", "fraction of the propeller speed a stand-on ship takes off while she acts "
+       "alone for a ship crossing from port (Rule 17(a)(ii), with the starboard escape)", "Hagen et al. 2023 "
+       "(evaluator.yaml) delta_speed_reduction_app: a 50 % speed reduction is readily apparent", "colregs-vortex",
+       high_open=True),
     # channel walls
     _P("wall_lam", 10.0, 0.0, None, "L²/(L/U)", "line-source strength of a channel wall",
        "paper §Narrow Waterways (Λ = 10)", "walls"),
@@ -278,6 +289,17 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "it becomes forbidden or no neighbour is within R_safe); false: re-pick the goal-closest every step",
        "paper §Statistical Analysis (the VO 'maintains this velocity until it steers clear')",
        "velocity-obstacle", kind="bool", structural=True),
+    _P("vo_speed_levels", 4, 2, 16, "", "speed levels of 'velocity-obstacle-speed': propeller speeds evenly "
+       "spaced from the service rpm down to dead slow ahead (engine_dead_slow), each searched over every candidate "
+       "heading ('velocity-obstacle' keeps its speed)", "our choice: the four ahead orders of an engine telegraph "
+       "(full, half, slow, dead slow ahead); for the KCS at its design speed 1, 0.75, 0.5 and 0.25 U",
+       "velocity-obstacle", kind="int", structural=True),
+    _P("vo_speed_weight", 0.0, 0.0, None, "", "extra cost of slowing down in 'velocity-obstacle-speed', per unit of "
+       "speed reduction (fraction of the service speed), added to |v - v_pref| / V_service (v_pref: the service "
+       "speed towards the goal)", "the velocity-obstacle selection rule, the admissible velocity closest to the "
+       "preferred one (Fiorini & Shiller 1998, Int. J. Robot. Res. 17(7); van den Berg et al. 2008, ICRA), "
+       "without extra weight; > 0 prefers course alterations (COLREG Rule 8(b)) over slowing (Rule 8(e))",
+       "velocity-obstacle"),
     # outcome
     _P("stall_window", 50.0, 0.0, None, "L/U", "a run that made no progress towards its goal for this long "
        "before t_max is 'stalled'", "our choice", "outcome", low_open=True),
@@ -292,6 +314,15 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "iitm-lab: the paper laboratory's R_safe, collision distance and head-on sector (paper Table 3, "
        "§Statistical Analysis); ntnu-2023: Hagen et al. 2023 (Ocean Eng. 288); every threshold's source in "
        "mmg_casadi.colregs.profiles", "outcome", kind="choice", choices=tuple(SCORING_PROFILES)),
+    _P("targets", "avoid", None, None, "", "what the sampled target ships of the statistical study do: 'avoid' "
+       "(every ship uses the study's method) or 'hold' (ships other than the own ship hold course and speed, "
+       "method 'none'); only the study's sampled scenarios read it", "avoid: the paper's statistical analysis; "
+       "hold: the own ship alone responsible, as the Imazu study's held targets", "outcome", kind="choice",
+       choices=("avoid", "hold")),
+    _P("target_slowdown", 0.0, 0.0, 0.6, "", "fraction of its speed every sampled target ship takes off halfway "
+       "along its route (a waypoint at the midpoint, the reduced speed on the leg to the goal); 0: constant speed; "
+       "only the study's sampled scenarios read it", "0: the paper's constant-speed targets; at most 0.6 keeps "
+       "the slowest sampled target (0.5 U) within the scenario speeds' 0.2 U", "outcome"),
     # environment (calm water by default, as in the paper; see mmg_casadi.vessel.environment)
     _P("current_speed", 0.0, 0.0, 1.0, "U", "speed of a uniform current (fraction of the design speed)",
        "our choice: calm water as in the paper; model Fossen 2021 §10.3 (mmg_casadi.vessel.environment)",
@@ -506,7 +537,7 @@ def load_file(path) -> dict:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError) as err:
         raise ParameterError("params file", "an existing, readable UTF-8 TOML file", f"{path} ({err})") from None
-    except tomllib.TOMLDecodeError as err:
+    except (tomllib.TOMLDecodeError, RecursionError) as err:  # RecursionError: arrays nested too deep
         raise ParameterError("params file", f"valid TOML ({err})", str(path)) from None
     if "params" in raw:
         if set(raw) != {"params"} or not isinstance(raw["params"], dict):

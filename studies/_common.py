@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from mmg_casadi.guidance import methods as registry
 from mmg_casadi.io import write_json
 from mmg_casadi.params import resolve
-from mmg_casadi.plotting import COLORS, draw_circle, draw_goal, draw_path, marine_axes
+from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_circle, draw_goal, draw_path, marine_axes
 from mmg_casadi.scenarios.scenario import with_method
 from mmg_casadi.scenarios.run import run_scenario, write_outputs
 
@@ -103,5 +103,5 @@ def plot_comparison(by_method: dict, path, title="") -> Figure:
         a2.legend(fontsize=7)
     if title:
         fig.suptitle(title)
-    fig.savefig(path, dpi=100)
+    fig.savefig(path, dpi=FIGURE_DPI)
     return fig

@@ -30,12 +30,12 @@ import sys
 from pathlib import Path
 
 from mmg_casadi.montecarlo.comparisons import compare_methods
-from mmg_casadi.errors import InputError
+from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.io import write_json
+from mmg_casadi.scenarios import encounters
 from mmg_casadi.guidance.methods import PAPER_STATISTICS
-from mmg_casadi.montecarlo.study import run_study
+from mmg_casadi.montecarlo.study import check_resumable, check_study_args, run_study
 from mmg_casadi.montecarlo.results import ResultsTable
-from mmg_casadi.montecarlo.sampling import parse_envs
 
 from . import colregs, conflict, narrow_channel, static_obstacle, waypoint_square
 
@@ -74,8 +74,12 @@ def run(out, *, runs: int = PAPER_RUNS, base_seed: int = 0, params=None, workers
     dict
         ``{"runs", "claims"}``.
     """
-    if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
-        raise InputError("runs", "an integer >= 1", runs)
+    args = check_study_args(runs=runs, envs=envs, methods=PAPER_STATISTICS, base_seed=base_seed, params=params,
+                            workers=workers)  # before the quick studies: bad input is refused at once
+    check_resumable(Path(out) / "statistics", runs=args["runs"], envs=args["envs"], methods=args["methods"],
+                    base_seed=args["base_seed"], params=args["params"], ranges=args["ranges"])
+    for sc in _quick_scenarios():  # every run's steps and parameters, before the first run
+        build_problem(sc, params)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     quick = {
@@ -85,7 +89,7 @@ def run(out, *, runs: int = PAPER_RUNS, base_seed: int = 0, params=None, workers
         "conflict": conflict.run(out / "conflict", params=params),
         "narrow-channel": narrow_channel.run(out / "narrow-channel", params=params),
     }
-    envs = parse_envs(envs) if isinstance(envs, str) else tuple(envs)
+    envs = args["envs"]
     summary = run_study(out / "statistics", runs=runs, envs=envs, methods=PAPER_STATISTICS, base_seed=base_seed,
                         params=params, workers=workers, progress=progress)
     rows = [r for r in ResultsTable(out / "statistics" / "runs.csv").read()
@@ -98,6 +102,13 @@ def run(out, *, runs: int = PAPER_RUNS, base_seed: int = 0, params=None, workers
 
 
 # ------------------------------------------------------------------------------------------------ helpers
+
+def _quick_scenarios() -> list:
+    """The scenarios of the quick studies (each is run with several methods and the same parameters)."""
+    return [encounters.waypoint_square(), *encounters.static_obstacle_cases().values(),
+            *encounters.colregs_cases().values(), *encounters.conflict_cases().values(),
+            *encounters.narrow_channel_cases().values()]
+
 
 def _claim(cid, section, claim, paper, measured, ci, verdict) -> dict:
     assert verdict in VERDICTS, verdict

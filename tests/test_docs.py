@@ -165,6 +165,35 @@ def check_site(html: Path) -> None:
         assert f" {name} " in formats, f"formats: {name} is not described"
     for key in ("collision_kind", "encounters", "reactive_time", "t_enter"):  # the metrics.json schema
         assert re.search(rf"\b{key}\b", formats), f"formats: metrics.json key {key} is not described"
+    link = re.search(r'href="([^"]*metrics\.schema\.json)"', (html / "formats.html").read_text(encoding="utf-8"))
+    assert link, "formats: no link to the JSON Schema of metrics.json"
+    from mmg_casadi.scenarios.metrics_schema import schema_text
+    assert (html / link.group(1)).read_text(encoding="utf-8") == schema_text(), "formats: stale JSON Schema"
+    # How-to pages of the features beyond the paper: each gives its command.
+    for page, command in (("colregs_vortex", "--methods colregs-vortex"), ("colregs_scoring", "colregs_profile"),
+                          ("imazu", "mmg-casadi study imazu"), ("wind_current", "mmg-casadi study disturbance"),
+                          ("sweep", "mmg-casadi study sweep"), ("study_paper", "mmg-casadi study paper"),
+                          ("pd_gains", "--tracking-tolerance 0.03")):
+        source = (html / "howto" / f"{page}.html").read_text(encoding="utf-8")
+        text = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", "", source))
+        assert command in text, f"{page}: no `{command}`"
+        assert f'href="{page}.html"' in (html / "howto" / "index.html").read_text(encoding="utf-8"), page
+    import dataclasses
+
+    from mmg_casadi.colregs.profiles import ScoringProfile
+    scoring = _text((html / "howto" / "colregs_scoring.html").read_text(encoding="utf-8"))
+    assert all(f" {f.name} " in scoring for f in dataclasses.fields(ScoringProfile) if f.name != "name")
+    # Figures: 150 dpi or more (the gallery, the notebooks, the how-to pages).
+    from PIL import Image
+    pages = [html / "gallery.html", *(html / "notebooks").glob("*.html"), *(html / "howto").glob("*.html")]
+    shown = 0
+    for page in pages:
+        for src in re.findall(r'<img[^>]+src="([^"]+\.png)"', page.read_text(encoding="utf-8")):
+            with Image.open(page.parent / src) as im:
+                dpi = im.info.get("dpi", (0.0, 0.0))[0]
+            assert dpi >= 149.5, f"{page.name}: {src} at {dpi:.0f} dpi"
+            shown += 1
+    assert shown >= 15, f"only {shown} figures checked"
     # Theory: equations rendered by MathJax, with the paper's labels and links to the functions.
     theory = (html / "theory.html").read_text(encoding="utf-8")
     assert theory.count('class="math notranslate nohighlight"') >= 15, "theory: too few equations"

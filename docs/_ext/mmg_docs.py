@@ -325,6 +325,7 @@ OUTCOME_DOCS = {
 RUN_FAILURE_DOCS = {
     "collision": "the own ship came within `collision_distance` of a ship or an obstacle centre, or touched a "
                  "wall (a collision wins over every other failure)",
+    "grounding": "the own ship touched land: its centre came within half its beam of an edge of a land polygon",
     "timeout": "no collision, the own ship's outcome is `timeout`",
     "diverged": "no collision, the own ship's outcome is `diverged`",
     "stalled": "no collision, the own ship's outcome is `stalled`",
@@ -340,6 +341,7 @@ MECHANISM_DOCS = {
                  "second mechanism)",
     "ship-ship": "any other collision with a ship",
     "obstacle": "any other collision with a static obstacle",
+    "grounding": "touched land (the run's failure `grounding`)",
     "stalled": "no collision, goal not reached: stalled",
     "timeout": "no collision, goal not reached: timed out",
     "diverged": "no collision, goal not reached: diverged",
@@ -399,6 +401,7 @@ def write_formats() -> None:
         "ships": ("array of tables", "required, ≥ 1", "the ships; the first is the own ship"),
         "obstacles": ("array of tables", "none", "static circular obstacles"),
         "walls": ("array of tables", "none", "channel walls, each a polyline"),
+        "land": ("array of tables", "none", "land, each a polygon; touching it is a grounding"),
         "environment": ("table", "calm water", "uniform current and steady wind (aliases of table parameters)"),
     }
     ship = {
@@ -415,6 +418,13 @@ def write_formats() -> None:
                    f"speed on the leg to each waypoint, one per waypoint, each in [{lo}, {hi}]"),
         "vessel": ("string", "the table's `vessel`" if ship_defaults.get("vessel") is None else ship_defaults["vessel"],
                    "", "hull: " + ", ".join(f"`{v}`" for v in VESSELS)),
+        "length_m": ("number > 0", "none", "m", "the ship's own length, as a traffic situation gives it; kept as "
+                     "data and written back by `convert` (the simulation draws every ship as the hull of length L)"),
+        "beam_m": ("number > 0", "none", "m", "the ship's own beam (maritime-schema `dimensions.width`); data, as "
+                   "`length_m`"),
+        "metadata": ("table", "none", "", "further static data kept as read (maritime-schema names: `id`, `mmsi`, "
+                     "`imo`, `shipType`, `sogMax`, `dimensions.height`, ...) and written back by `convert`; "
+                     "strings, finite numbers, booleans, arrays and tables (no datetimes)"),
     }
     obstacle = {
         "position": ("[x, y]", "required", "L", "centre"),
@@ -422,7 +432,12 @@ def write_formats() -> None:
     }
     wall = {"points": ("list of [x, y]", "required", "L",
                        "polyline of ≥ 2 points; each consecutive pair is one wall segment")}
+    land = {"points": ("list of [x, y]", "required", "L",
+                       "polygon of ≥ 3 points (closed: the last joins the first), with an area; no ship starts and "
+                       "no waypoint lies inside; its edges act like walls and a ship whose centre comes within "
+                       "half its beam of one grounds")}
     _check_keys("top-level scenario tables", tables, S.TOP_KEYS)
+    _check_keys("[[land]] keys", land, S.LAND_KEYS)
     _check_keys("[[ships]] keys", ship, S.SHIP_KEYS)
     _check_keys("[[obstacles]] keys", obstacle, S.OBSTACLE_KEYS)
     _check_keys("[[walls]] keys", wall, S.WALL_KEYS)
@@ -443,7 +458,8 @@ def write_formats() -> None:
     rows = [("`method`", "string", "required", methods, "guidance method of every ship without its own")]
     rows += [param_row(k, k) for k in S.SETTINGS_KEYS if k != "method"]
     out += _table(("key", "type", "default", "allowed", "meaning"), rows)
-    for title, spec in (("`[[ships]]`", ship), ("`[[obstacles]]`", obstacle), ("`[[walls]]`", wall)):
+    for title, spec in (("`[[ships]]`", ship), ("`[[obstacles]]`", obstacle), ("`[[walls]]`", wall),
+                        ("`[[land]]`", land)):
         out += [f"### {title}", ""]
         out += _table(("key", "type", "default", "unit", "meaning"), ((f"`{k}`", *v) for k, v in spec.items()))
     out += ["### `[environment]`", "",
@@ -488,6 +504,64 @@ def write_formats() -> None:
     _write(GENERATED / "formats_metrics.rst", inspect_doc(run_module) + "\n")
 
 
+def write_metrics_schema() -> None:
+    """``metrics.schema.json``: the packaged JSON Schema of ``metrics.json``, for the download link of formats.md."""
+    from mmg_casadi.scenarios.metrics_schema import SCHEMA_FILE, schema_text
+    _write(GENERATED / SCHEMA_FILE, schema_text())
+
+
+def write_scoring_profiles() -> None:
+    """``colregs_profiles.md``: every threshold of the encounter scorer's profiles, its value in each profile and
+    its meaning (:class:`mmg_casadi.colregs.profiles.ScoringProfile`); the sources are the profiles' docstrings."""
+    import dataclasses
+    import inspect
+
+    from numpydoc.docscrape import NumpyDocString
+
+    from mmg_casadi.colregs.profiles import SCORING_PROFILES, ScoringProfile, scoring_profile
+    meaning = {}
+    for p in NumpyDocString(inspect.getdoc(ScoringProfile))["Parameters"]:
+        for name in p.name.split(","):
+            meaning[name.strip()] = " ".join(p.desc)
+    profiles = [scoring_profile(n) for n in SCORING_PROFILES]
+
+    def fmt(v):
+        return "—" if v is None else "∞" if v == float("inf") else f"{v:.4g}" if isinstance(v, float) else str(v)
+
+    fields = [f.name for f in dataclasses.fields(ScoringProfile) if f.name != "name"]
+    _check_keys("scoring profile fields", meaning, ["name", *fields])
+    rows = ((f"`{f}`", *(fmt(getattr(p, f)) for p in profiles), meaning.get(f, "")) for f in fields)
+    _write(GENERATED / "colregs_profiles.md", "\n".join(_table(("threshold", *(f"`{n}`" for n in SCORING_PROFILES),
+                                                                  "meaning"), rows)))
+
+
+RESULT_FIGURES = {"sweep_rsafe.png": ("results/issue12/sweep_rsafe/sweep.csv", "r_safe")}
+"""Figures of committed full-size sweeps (table ``docs/``-relative, swept parameter), drawn again at build time."""
+
+
+def write_result_figures() -> None:
+    """Draw the committed full-size results of :data:`RESULT_FIGURES` with the current figure code (resolution,
+    axis units) into ``_generated/results/``."""
+    import csv
+
+    from studies.sweep import plot_sweep
+
+    def value(text: str):
+        for kind in (int, float):
+            try:
+                return kind(text)
+            except ValueError:
+                pass
+        return text
+
+    for name, (table, param) in RESULT_FIGURES.items():
+        out = GENERATED / "results" / name
+        out.parent.mkdir(parents=True, exist_ok=True)
+        with open(DOCS / table, newline="", encoding="utf-8") as f:
+            rows = [{k: value(v) for k, v in r.items()} for r in csv.DictReader(f)]
+        plot_sweep(rows, param, out)
+
+
 def inspect_doc(obj) -> str:
     import inspect
     return inspect.getdoc(obj) or ""
@@ -513,6 +587,9 @@ def generate(app) -> None:
     write_claims()
     write_cli()
     write_formats()
+    write_metrics_schema()
+    write_scoring_profiles()
+    write_result_figures()
     copy_notebooks()
     build_gallery(app.config.mmg_gallery_workers)
 

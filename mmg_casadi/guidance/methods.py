@@ -14,7 +14,7 @@ closed loop adds them to the state of every ship of a layout that uses the metho
 Examples
 --------
 >>> NAMES
-('inverse-square', 'sink-vortex', 'modified-vortex', 'velocity-obstacle', 'none', 'colregs-vortex')
+('inverse-square', 'sink-vortex', 'modified-vortex', 'velocity-obstacle', 'velocity-obstacle-speed', 'none', 'colregs-vortex')
 >>> METHODS["modified-vortex"].groups
 ('sink-vortex', 'modified-vortex')
 """
@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import dataclasses
+import functools
 
 import casadi as ca
 
@@ -34,7 +35,9 @@ from mmg_casadi.guidance import fields
 
 from mmg_casadi.guidance import velocity_obstacle
 from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams
-from mmg_casadi.errors import InputError
+from mmg_casadi.errors import InputError, ParameterError
+from mmg_casadi.vessel.library import load_vessel
+from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
 
 
 @dataclass(frozen=True)
@@ -197,10 +200,11 @@ _CV_FIELDS = tuple(f.name for f in dataclasses.fields(ColregsVortexParams))
 
 def _colregs_vortex(g: GuidanceInputs):
     P = g.P
-    return Command(colregs_vortex.colregs_vortex(
-        g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active, lam_sink=P["lam_sink"], k_vor0=P["k_vor0"],
-        r_safe=P["r_safe"], r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"],
-        n_candidates=g.layout.vo_candidates, **{k: P[f"cv_{k}"] for k in _CV_FIELDS}))
+    heading, factor, memory = colregs_vortex.colregs_vortex_command(
+        g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active, g.memory, lam_sink=P["lam_sink"],
+        k_vor0=P["k_vor0"], r_safe=P["r_safe"], r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"],
+        n_candidates=g.layout.vo_candidates, **{k: P[f"cv_{k}"] for k in _CV_FIELDS})
+    return Command(heading, factor * g.service_rpm, memory)
 
 
 def _velocity_obstacle(g: GuidanceInputs):
@@ -215,17 +219,54 @@ def _velocity_obstacle(g: GuidanceInputs):
     return Command(vec, memory={"held_heading": ca.atan2(vec[1], vec[0])})
 
 
+@functools.lru_cache(maxsize=None)
+def _rpm_per_speed(vessel: str) -> float:
+    """Propeller speed (rev/min) of the steady speed 1 U of ``vessel``, from the model's surge balance."""
+    return propeller_rpm_for_speed(1.0, load_vessel(vessel).ship)
+
+
+def _velocity_obstacle_speed(g: GuidanceInputs):
+    lay = g.layout
+    vessels = {lay.vessel(i) for i in range(lay.n_ships)}
+    if len(vessels) != 1:
+        raise ParameterError("vessels", "one vessel for every ship of a layout with velocity-obstacle-speed",
+                             sorted(vessels))
+    vessel = vessels.pop()
+    dead_slow = g.P["engine_dead_slow"] * load_vessel(vessel).ship.n_design_rpm
+    levels = velocity_obstacle.speed_levels(g.service_rpm, dead_slow, _rpm_per_speed(vessel), lay.vo_speed_levels)
+    D = g.P["collision_distance"]
+    psi, rpm, _ = velocity_obstacle.velocity_obstacle_speed(
+        g.pos, g.goal, g.nb_pos, g.nb_vel, g.active, levels=levels, collision_distance=D,
+        n_candidates=lay.vo_candidates, speed_weight=g.P["vo_speed_weight"], cone=lay.vo_cone)
+    if lay.vo_hold:  # keep the remembered heading, at the service speed, while it stays clear at that speed
+        m = g.nb_pos.size2()
+        hold = (ca.sum2(g.active) > 0 if m else 0) * velocity_obstacle.heading_feasible(
+            g.pos, levels[0][1], g.memory["held_heading"], g.nb_pos, g.nb_vel, g.active, collision_distance=D,
+            cone=lay.vo_cone)
+        psi = ca.if_else(hold, g.memory["held_heading"], psi)
+        rpm = ca.if_else(hold, levels[0][0], rpm)
+    vec = ca.vertcat(ca.cos(psi), ca.sin(psi))
+    return Command(vec, rpm=rpm, memory={"held_heading": ca.atan2(vec[1], vec[0])})
+
+
 METHODS: dict[str, Method] = {m.name: m for m in (
     Method("inverse-square", _inverse_square, ("inverse-square",), "paper §4.1, eqs. (attractive)–(repulsive)"),
     Method("sink-vortex", _sink_vortex, ("sink-vortex",), "paper §4.2, eqs. (sink)–(vortex)"),
     Method("modified-vortex", _modified_vortex, ("sink-vortex", "modified-vortex"),
            "paper §4.3, eqs. (modified_vortex)–(factor_f)"),
     Method("velocity-obstacle", _velocity_obstacle, ("velocity-obstacle",),
-           "Huang et al. 2018 (Ocean Eng. 151), the paper's baseline", memory=("held_heading",)),
+           "Huang et al. 2018 (Ocean Eng. 151), the paper's baseline: headings at constant speed",
+           memory=("held_heading",)),
+    Method("velocity-obstacle-speed", _velocity_obstacle_speed, ("velocity-obstacle",),
+           "Huang et al. 2018 (Ocean Eng. 151) with speed changes: the heading search at each of vo_speed_levels "
+           "steady speeds, the admissible velocity closest to the preferred one (plus vo_speed_weight per unit of "
+           "slowing); the paper's baseline keeps its speed",
+           inputs=("vo_speed_weight", "engine_dead_slow"), memory=("held_heading",), commands_speed=True),
     Method("none", None, (), "ILOS waypoint tracking only (a ship that holds its course)"),
     Method("colregs-vortex", _colregs_vortex, ("sink-vortex", "modified-vortex", "colregs-vortex"),
            "ours: the modified vortex with COLREG Rules 8, 13 and 17 (mmg_casadi.guidance.colregs_vortex)",
-           inputs=tuple(f"cv_{k}" for k in _CV_FIELDS), goal_capture=True),
+           inputs=tuple(f"cv_{k}" for k in _CV_FIELDS), goal_capture=True, memory=colregs_vortex.MEMORY,
+           commands_speed=True),
 )}
 """Every method, by name (:func:`register` adds one)."""
 
@@ -298,7 +339,7 @@ def get(name, field: str = "method") -> Method:
     >>> get("vortex")
     Traceback (most recent call last):
     ...
-    mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, none, colregs-vortex, got 'vortex'
+    mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, velocity-obstacle-speed, none, colregs-vortex, got 'vortex'
     """
     if not isinstance(name, str) or name not in METHODS:
         raise InputError(field, f"one of: {', '.join(METHODS)}", name)

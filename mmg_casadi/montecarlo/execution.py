@@ -109,7 +109,10 @@ def sampled_scenario(environment: int, method: str, run: int, base_seed: int = 0
     (3, 1, 'modified-vortex', 100.0)
     """
     sample = sample_scenario(environment, run, base_seed)
-    sc = scenario_from_dict(sample.to_scenario_dict(method=method), source=f"env{environment}/{method}/run{run}")
+    targets = (params or {}).get("targets", PARAMETERS["targets"].default)
+    slowdown = (params or {}).get("target_slowdown", PARAMETERS["target_slowdown"].default)
+    sc = scenario_from_dict(sample.to_scenario_dict(method=method, targets=targets, target_slowdown=slowdown),
+                            source=f"env{environment}/{method}/run{run}")
     return with_params(sc, params)
 
 
@@ -288,7 +291,7 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
         at = np.column_stack([np.interp(own["collision_time"], t, states[:, :, c][:, i])
                               for i in range(states.shape[1]) for c in (0, 1)]).reshape(-1, 2)
     unavoidable = False
-    if own["collision_time"] is not None:
+    if own["collision_kind"] in ("ship", "obstacle"):  # walls and land have no start-time test
         j, ships = own["collision_with"], scenario.ships
         if j < len(ships):
             h = ships[j].heading_rad

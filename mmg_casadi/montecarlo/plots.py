@@ -99,7 +99,7 @@ def plot_statistics(summary, path=None) -> Figure:
             ax.errorbar(xs, ys, yerr=[lo, hi], marker=_MARKERS[i % len(_MARKERS)], linestyle="-", capsize=4,
                         label=str(method))
         ax.set_title(title)
-        ax.set_xlabel("Environment")
+        ax.set_xlabel("Environment (1-5 the paper's, 6 a strait) [-]")
         ax.set_ylabel(ylabel)
         ax.set_xticks(envs)
         ax.grid(True, alpha=0.3)

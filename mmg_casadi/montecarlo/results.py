@@ -445,7 +445,7 @@ class Summary:
         --------
         >>> rows = [{"environment": 1, "method": "apf", "run": 0, "success": False, "failure_mechanism": "near-goal"}]
         >>> print(summarize(rows).failures_markdown().splitlines()[2])
-        | 1 | apf | 1 | 1 | 0 | 0 | 1 | 0 | 0 | 0 | 0 | 0 |
+        | 1 | apf | 1 | 1 | 0 | 0 | 1 | 0 | 0 | 0 | 0 | 0 | 0 |
         """
         head = ["Env", "Method", "Runs", "Failed", *MECHANISMS]
         lines = ["| " + " | ".join(head) + " |", "|---:|:---|---:|---:|" + "---:|" * len(MECHANISMS)]

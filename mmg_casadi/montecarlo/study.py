@@ -20,24 +20,29 @@ simulated by the compiled closed loop and reduced to one row of :data:`~mmg_casa
   ``summary.csv``, ``summary.md``, ``statistics.png``, ``metrics.json`` and replayable TOML files of the first
   failures of every cell. A lock file keeps a second study from writing into the same directory at once.
 
-The summary adds the compliance rate per cell (Wilson 95 % interval over the runs with an encounter) and the
-failure counts per mechanism; ``comparisons.csv`` holds the paired comparison of every two methods per
-environment (:mod:`mmg_casadi.montecarlo.comparisons`).
+The summary adds the per-encounter COLREG compliance per cell (Wilson 95 % interval over the encounters with a
+risk of collision) and the failure counts per mechanism; ``comparisons.csv`` holds the paired comparison of every
+two methods per environment (:mod:`mmg_casadi.montecarlo.comparisons`). ``colregs.csv`` gives the per-encounter
+compliance by role and by rule, ``colregs_comparisons.csv`` the paired comparison of every two methods encounter
+by encounter (:mod:`mmg_casadi.montecarlo.encounter_summary`); ``summary.md`` shows both.
 
 Every run uses the same resolved parameter set (``params`` of :func:`run_study`: the table's defaults with the
-user's overrides), recorded in ``study.json``; a study is resumed only with the same parameters.
+user's overrides), recorded with its :func:`fingerprint` in ``runs.params.json`` (:data:`PARAMS_FILE`, the side file of
+``runs.csv``, written before its first row) and in ``study.json``; a study is resumed only with the same
+parameters, and a ``runs.csv`` whose side file is missing is not resumed at all.
 
 With ``current``/``wind`` ranges (:mod:`mmg_casadi.montecarlo.disturbance_sampling`) every run meets its own steady
 current and wind, drawn from ``(environment, run, seed)`` by a generator of its own (the same for every method;
 the encounters are those of the calm study); the columns ``current_speed``, ``current_direction_deg``,
 ``wind_speed``, ``wind_direction_deg`` of ``runs.csv`` record it (or the fixed values of ``params``), and
-``study.json`` the ranges: a study is resumed only with the same ranges.
+``runs.params.json`` (and ``study.json``) the ranges: a study is resumed only with the same ranges.
 """
 
 from __future__ import annotations
 
 import contextlib
 import fcntl
+import hashlib
 import json
 import os
 import sys
@@ -48,8 +53,8 @@ import numpy as np
 
 from mmg_casadi.errors import InputError
 from mmg_casadi.guidance import methods as method_registry
-from mmg_casadi.io import write_json
-from mmg_casadi.limits import check_runs
+from mmg_casadi.io import json_safe, write_json
+from mmg_casadi.limits import check_runs, check_study_size
 from mmg_casadi.montecarlo.batching import (BACKENDS, DEFAULT_BATCH, LocalExecutor, RayExecutor, _check_workers,
                                             plan_batches, prepare_layouts)
 from mmg_casadi.montecarlo import encounter_summary
@@ -57,7 +62,7 @@ from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceR
 from mmg_casadi.montecarlo.execution import (DEFAULT_CHUNK, _non_default, _run_disturbances, layout_for,
                                              sampled_scenario)
 from mmg_casadi.montecarlo.results import ResultsTable, summarize
-from mmg_casadi.montecarlo.sampling import ENVIRONMENTS, parse_envs
+from mmg_casadi.montecarlo.sampling import ALL_ENVIRONMENTS, parse_envs
 from mmg_casadi.params import PARAMETERS, diff, resolve
 from mmg_casadi.progress import progress_bar
 from mmg_casadi.scenarios.scenario import dump_scenario
@@ -66,6 +71,10 @@ DEFAULT_METHODS: tuple[str, ...] = method_registry.PAPER_STATISTICS
 """Methods compared by the paper's statistical analysis."""
 MAX_FAILURE_FILES = 20
 """Replayable scenario files written per (environment, method) cell."""
+PARAMS_FILE = "runs.params.json"
+"""Side file of ``runs.csv``: the resolved parameters and disturbance ranges its rows were made with and their
+:func:`fingerprint`, written (atomically) before the table's first row; a table with rows is resumed only with
+the same parameters and ranges, and not at all without its record."""
 
 
 # ----------------------------------------------------------------------------------------------- the study
@@ -76,10 +85,10 @@ def _check_envs(envs) -> tuple[int, ...]:
     try:
         items = list(envs)
     except TypeError:
-        raise InputError("envs", "environment numbers in 1-5", envs) from None
-    if not items or any(isinstance(e, bool) or not isinstance(e, (int, np.integer)) or e not in ENVIRONMENTS
-                        for e in items):
-        raise InputError("envs", "environment numbers in 1-5", envs)
+        raise InputError("envs", "environment numbers in 1-6", envs) from None
+    if not items or any(isinstance(e, bool) or not isinstance(e, (int, np.integer))
+                        or e not in ALL_ENVIRONMENTS for e in items):
+        raise InputError("envs", "environment numbers in 1-6", envs)
     return tuple(sorted({int(e) for e in items}))
 
 
@@ -87,6 +96,57 @@ def _check_int(field: str, value, low: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
         raise InputError(field, f"an integer >= {low}", value)
     return int(value)
+
+
+def check_study_args(*, runs=200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS, base_seed=0, params=None,
+                     backend="local", address=None, workers=None, batch_size=DEFAULT_BATCH, chunk=DEFAULT_CHUNK,
+                     current=None, wind=None) -> dict:
+    """Check every argument of :func:`run_study` without doing any work or writing anything.
+
+    Callers that run other work first (``study paper``, ``study sweep``, ``tune apf``) call it before that work,
+    so bad input is refused at once.
+
+    Parameters
+    ----------
+    runs, envs, methods, base_seed, params, backend, address, workers, batch_size, chunk, current, wind
+        As for :func:`run_study`.
+
+    Returns
+    -------
+    dict
+        The checked values: ``runs``, ``envs`` (tuple), ``methods`` (tuple), ``base_seed``, ``workers``,
+        ``batch_size``, ``chunk``, ``params`` (the resolved set) and ``ranges``
+        (:class:`~mmg_casadi.montecarlo.disturbance_sampling.DisturbanceRanges`).
+
+    Examples
+    --------
+    >>> check_study_args(runs=10, envs="1-2", methods="none")["envs"]
+    (1, 2)
+    >>> check_study_args(workers=0)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.InputError: workers: expected an integer in [1, ...] (4 per core; or nothing for all cores), got 0
+    """
+    runs = check_runs(_check_int("runs", runs, 1), "runs")
+    if backend not in BACKENDS:
+        raise InputError("backend", f"one of: {', '.join(BACKENDS)}", backend)
+    if address is not None and backend != "ray":
+        raise InputError("address", "nothing unless backend is 'ray'", address)
+    envs = _check_envs(envs)
+    methods = method_registry.parse_list(methods)
+    check_study_size(runs, len(envs) * len(methods), "runs")
+    base_seed = _check_int("base_seed", base_seed, 0)
+    workers = _check_workers("workers", workers)
+    batch_size = _check_int("batch_size", batch_size, 1)
+    chunk = _check_int("chunk", chunk, 1)
+    resolved = resolve(params, prefix="params.")
+    ranges = DisturbanceRanges(current=current, wind=wind)
+    for name, rng in (("current", ranges.current), ("wind", ranges.wind)):
+        for key in (f"{name}_speed", f"{name}_direction_deg"):
+            if rng is not None and resolved[key] != PARAMETERS[key].default:
+                raise InputError(name, f"nothing while params sets {key} (a fixed {name})", list(rng))
+    return {"runs": runs, "envs": envs, "methods": methods, "base_seed": base_seed, "workers": workers,
+            "batch_size": batch_size, "chunk": chunk, "params": resolved, "ranges": ranges}
 
 
 def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS, base_seed: int = 0,
@@ -98,9 +158,9 @@ def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT
     Parameters
     ----------
     out_dir : str or Path
-        Output directory: ``runs.csv`` (one row per run, appended as batches finish), ``study.json`` (the
-        resolved parameter set and the seed the table was made with), ``summary.csv``, ``summary.md`` (with
-        the failure mechanisms and the paired comparisons), ``comparisons.csv``,
+        Output directory: ``runs.csv`` (one row per run, appended as batches finish), ``runs.params.json``
+        and ``study.json`` (the resolved parameter set and the disturbance ranges the table was made with),
+        ``summary.csv``, ``summary.md`` (with the failure mechanisms and the paired comparisons), ``comparisons.csv``,
         ``statistics.png``, ``metrics.json`` (config, parameters and summary rows) and
         ``failures/env{e}_{method}_run{r}.toml`` (first ≤ 20 failures per cell, replayable with
         ``mmg-casadi simulate``).
@@ -140,25 +200,14 @@ def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT
     Summary
         The summary of the requested cells (rows already in ``runs.csv`` included).
     """
-    runs = check_runs(_check_int("runs", runs, 1), "runs")
-    if backend not in BACKENDS:
-        raise InputError("backend", f"one of: {', '.join(BACKENDS)}", backend)
-    if address is not None and backend != "ray":
-        raise InputError("address", "nothing unless backend is 'ray'", address)
-    envs = _check_envs(envs)
-    methods = method_registry.parse_list(methods)
-    base_seed = _check_int("base_seed", base_seed, 0)
-    workers = _check_workers("workers", workers)
-    batch_size = _check_int("batch_size", batch_size, 1)
-    chunk = _check_int("chunk", chunk, 1)
-    resolved = resolve(params, prefix="params.")
-    ranges = DisturbanceRanges(current=current, wind=wind)
-    for name, rng in (("current", ranges.current), ("wind", ranges.wind)):
-        for key in (f"{name}_speed", f"{name}_direction_deg"):
-            if rng is not None and resolved[key] != PARAMETERS[key].default:
-                raise InputError(name, f"nothing while params sets {key} (a fixed {name})", list(rng))
-
+    args = check_study_args(runs=runs, envs=envs, methods=methods, base_seed=base_seed, params=params,
+                            backend=backend, address=address, workers=workers, batch_size=batch_size, chunk=chunk,
+                            current=current, wind=wind)
+    runs, envs, methods, base_seed, workers = (args[k] for k in ("runs", "envs", "methods", "base_seed", "workers"))
+    batch_size, chunk, resolved, ranges = args["batch_size"], args["chunk"], args["params"], args["ranges"]
     out = Path(out_dir)
+    check_resumable(out, runs=runs, envs=envs, methods=methods, base_seed=base_seed, params=resolved,
+                    ranges=ranges)  # before the directory and its lock file are made
     out.mkdir(parents=True, exist_ok=True)
     with _exclusive(out):
         return _run_study(out, runs, envs, methods, base_seed, resolved, backend, address, workers, progress,
@@ -183,13 +232,9 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
                chunk, executor, ranges=DisturbanceRanges()):
     table = ResultsTable(out / "runs.csv")
     planned = {(e, m, r) for e in envs for m in methods for r in range(runs)}
-    stored = [row for row in table.read() if (row["environment"], row["method"], row["run"]) in planned]
-    for row in stored:
-        if row["seed"] != base_seed:
-            raise InputError("base_seed", f"the seed {row['seed']} that {table.path} was made with (or a new "
-                             "output directory)", base_seed)
-    done = {(row["environment"], row["method"], row["run"]) for row in stored}
-    _check_study_params(out / "study.json", params, has_rows=bool(table.completed()), ranges=ranges)
+    done = check_resumable(out, runs=runs, envs=envs, methods=methods, base_seed=base_seed, params=params,
+                           ranges=ranges)  # again, under the lock
+    _record_study_params(out, params, ranges)
     tasks = plan_batches(envs, methods, runs, done=done, base_seed=base_seed, params=params,
                          batch_size=batch_size, chunk=chunk, disturbance=ranges)
     log = sys.stderr if progress else None
@@ -257,28 +302,119 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
     return summary
 
 
-def _check_study_params(path: Path, params: dict, *, has_rows: bool,
-                        ranges: DisturbanceRanges = DisturbanceRanges()) -> None:
-    """Refuse to resume a table made with other parameters (they are not columns of ``runs.csv``) or other
-    disturbance ranges; record them in ``study.json``. The error names the first differing parameter."""
-    if has_rows and path.exists():
+def fingerprint(params: dict, ranges: DisturbanceRanges = DisturbanceRanges()) -> str:
+    """SHA-256 (hex) of a resolved parameter set and the disturbance ranges: what the rows of one ``runs.csv``
+    share beyond their own columns.
+
+    Parameters
+    ----------
+    params : dict
+        A resolved parameter set (:func:`mmg_casadi.params.resolve`).
+    ranges : DisturbanceRanges, optional
+        Ranges of the per-run disturbance.
+
+    Examples
+    --------
+    >>> from mmg_casadi.params import resolve
+    >>> fingerprint(resolve()) == fingerprint(resolve({"r_safe": 15.0}))
+    True
+    >>> fingerprint(resolve()) == fingerprint(resolve({"r_safe": 20.0}))
+    False
+    """
+    text = json.dumps(json_safe({"params": params, "disturbance": ranges.to_dict()}), sort_keys=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _range_text(rng) -> str:
+    return "no range (calm water)" if rng is None else f"the range {rng[0]:g}-{rng[1]:g}"
+
+
+def _stored_record(out: Path, table: ResultsTable) -> dict:
+    """The parameters and ranges the rows of ``out/runs.csv`` were made with: its side file
+    :data:`PARAMS_FILE`, else (a table of an older version) ``study.json``; a table without either is refused."""
+    for name in (PARAMS_FILE, "study.json"):
+        path = out / name
+        if not path.exists():
+            continue
         try:
-            stored = json.loads(path.read_text(encoding="utf-8"))["params"]
+            record = json.loads(path.read_text(encoding="utf-8"))
+            if not isinstance(record["params"], dict):
+                raise TypeError
+            return record
         except (OSError, ValueError, KeyError, TypeError):
-            raise InputError("out_dir", f"a directory whose study.json records the parameters of its runs.csv "
-                             f"({path} is unreadable or from an older version; use a new output directory)",
-                             str(path.parent)) from None
-        key = diff(stored, params)
-        if key is not None:
-            raise InputError(f"params.{key}", f"{stored.get(key)!r}, the value {path.parent / 'runs.csv'} was made "
-                             "with (or a new output directory)", params[key])
-        made = json.loads(path.read_text(encoding="utf-8")).get("disturbance") or DisturbanceRanges().to_dict()
-        for name, rng in ranges.to_dict().items():
-            if made.get(name) != rng:
-                raise InputError(name, f"{made.get(name)!r}, the range {path.parent / 'runs.csv'} was made with "
-                                 "(or a new output directory)", rng)
-    if not path.exists() or not has_rows:
-        write_json(path, {"params": params, "disturbance": ranges.to_dict()})
+            raise InputError("out_dir", f"a directory whose {name} records the parameters of its runs.csv ({path} "
+                             "is unreadable; use a new output directory)", str(out)) from None
+    raise InputError("out_dir", f"a directory whose runs.csv has its parameter record {PARAMS_FILE} (it is "
+                     f"missing, so the parameters of the stored runs are unknown; use a new output directory)",
+                     str(out))
+
+
+def check_resumable(out, *, runs: int, envs, methods, base_seed: int, params: dict,
+                    ranges: DisturbanceRanges = DisturbanceRanges()) -> set:
+    """Refuse to add runs to ``out/runs.csv`` that would not be comparable with the rows it holds; writes nothing.
+
+    The seed is a column of every row; the resolved parameters and the disturbance ranges are not, so they are
+    compared with the table's side file :data:`PARAMS_FILE` (written before the table's first row): a table
+    with rows but without its record is not resumed. The error names the first differing parameter.
+
+    Parameters
+    ----------
+    out : str or Path
+        The study directory (it need not exist).
+    runs, envs, methods, base_seed
+        The planned runs (checked values, see :func:`check_study_args`).
+    params : dict
+        The resolved parameter set.
+    ranges : DisturbanceRanges, optional
+        Ranges of the per-run disturbance.
+
+    Returns
+    -------
+    set
+        Keys ``(environment, method, run)`` of the planned runs already stored.
+    """
+    out = Path(out)
+    table = ResultsTable(out / "runs.csv")
+    if not table.path.exists():
+        return set()
+    rows = table.read()
+    if not rows:
+        return set()
+    planned_envs, planned_methods = set(envs), set(methods)
+    done = set()
+    for row in rows:
+        if row["environment"] in planned_envs and row["method"] in planned_methods and row["run"] < runs:
+            if row["seed"] != base_seed:
+                raise InputError("base_seed", f"the seed {row['seed']} that {table.path} was made with (or a new "
+                                 "output directory)", base_seed)
+            done.add((row["environment"], row["method"], row["run"]))
+    record = _stored_record(out, table)
+    if record.get("fingerprint") == fingerprint(params, ranges):
+        return done
+    key = diff(record["params"], params)
+    if key is not None:
+        raise InputError(f"params.{key}", f"{record['params'].get(key)!r}, the value {table.path} was made "
+                         "with (or a new output directory)", params[key])
+    made = record.get("disturbance") or DisturbanceRanges().to_dict()
+    for name, rng in ranges.to_dict().items():
+        if made.get(name) != rng:
+            raise InputError(name, f"{_range_text(made.get(name))}, what {table.path} was made with (or a new "
+                             "output directory)", _range_text(rng))
+    return done
+
+
+def _record_study_params(out: Path, params: dict, ranges: DisturbanceRanges) -> None:
+    """Write the record of a table that has no rows yet (its side file :data:`PARAMS_FILE`, atomically, before
+    the first row is appended; and ``study.json``); a table with rows keeps the record it was made with."""
+    table = ResultsTable(out / "runs.csv")
+    if table.path.exists() and table.read():
+        if not (out / PARAMS_FILE).exists():  # a table of an older version, checked against its study.json
+            write_json(out / PARAMS_FILE, {"fingerprint": fingerprint(params, ranges), "params": params,
+                                           "disturbance": ranges.to_dict()})
+        return
+    record = {"fingerprint": fingerprint(params, ranges), "params": params, "disturbance": ranges.to_dict()}
+    write_json(out / PARAMS_FILE, record)
+    write_json(out / "study.json", {"params": params, "disturbance": ranges.to_dict()})
 
 
 def write_failures(rows, directory, *, params: dict | None = None, limit: int = MAX_FAILURE_FILES) -> list[Path]:

@@ -33,7 +33,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.plotting import COLORS, draw_goal, draw_path, marine_axes
+from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_goal, draw_path, marine_axes
 from mmg_casadi.guidance.methods import NAMES as METHODS
 from mmg_casadi.scenarios.run import run_scenario
 from mmg_casadi.scenarios.scenario import scenario_from_dict
@@ -227,8 +227,10 @@ def plot_imazu(rows: list[dict], path=None, *, title: str | None = None, ncols: 
         verdict = "safe" if row["safe"] else ("collision" if row["collided"] else "goal not reached")
         ax.set_title(f"case {row['case']}: d_min {row['min_distance']:.1f} L, {verdict}", fontsize=7,
                      color="k" if row["safe"] else "r")
+    fig.supxlabel("y (east) [L]", fontsize=8)  # one label per axis for the whole grid
+    fig.supylabel("x (north) [L]", fontsize=8)
     if title:
         fig.suptitle(title, fontsize=10)
     if path:
-        fig.savefig(path, dpi=110)
+        fig.savefig(path, dpi=FIGURE_DPI)
     return fig

@@ -10,6 +10,8 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
+from mmg_casadi.plotting import FIGURE_DPI
+
 from ..linear import yaw_subsystem
 from .analysis import _gain_row
 from .design import PdDesign, _polys
@@ -19,7 +21,7 @@ from .verification import NonlinearCheck
 
 def _save(fig: Figure, path) -> Figure:
     if path is not None:
-        fig.savefig(path, dpi=110)
+        fig.savefig(path, dpi=FIGURE_DPI)
     return fig
 
 
@@ -31,7 +33,7 @@ def plot_root_locus(design: PdDesign, path=None, *, paper: PdDesign | None = Non
     design : PdDesign
         The design whose gains are scaled.
     path : str or path-like, optional
-        Where to save the figure (PNG, 110 dpi); not saved if None.
+        Where to save the figure (PNG, 150 dpi); not saved if None.
     paper : PdDesign, optional
         A second gain pair (the paper's) whose locus is drawn as well.
     """
@@ -79,7 +81,7 @@ def plot_step(design: PdDesign, nonlinear: NonlinearCheck, path=None) -> Figure:
     nonlinear : NonlinearCheck
         Nonlinear check of the design (:func:`~tuning.pd.verification.verify_nonlinear`) with the steps to draw.
     path : str or path-like, optional
-        Where to save the figure (PNG, 110 dpi); not saved if None.
+        Where to save the figure (PNG, 150 dpi); not saved if None.
     """
     fig = Figure(figsize=(8, 6))
     ax1, ax2 = fig.add_subplot(2, 1, 1), fig.add_subplot(2, 1, 2)
@@ -115,7 +117,7 @@ def plot_gain_map(gain_map: GainMap, path=None, *, design: PdDesign | None = Non
     gain_map : GainMap
         The grid map (:func:`~tuning.pd.gain_map.paper_gains_map`).
     path : str or path-like, optional
-        Where to save the figure (PNG, 110 dpi); not saved if None.
+        Where to save the figure (PNG, 150 dpi); not saved if None.
     design : PdDesign, optional
         A design to mark (with its first-order Nomoto gains for a placement design).
     """
@@ -137,8 +139,8 @@ def plot_gain_map(gain_map: GainMap, path=None, *, design: PdDesign | None = Non
         if design.method == "placement":
             ax.plot(design.kp_nomoto, design.kd_nomoto, "w^", ms=8, mec="k",
                     label=f"Nomoto formula ({design.kp_nomoto:.3g}, {design.kd_nomoto:.3g})")
-    ax.set_xlabel("K_p")
-    ax.set_ylabel("K_d")
+    ax.set_xlabel("K_p [-]")
+    ax.set_ylabel("K_d [L/U]")
     ax.set_xlim(gain_map.kp_grid[0], gain_map.kp_grid[-1])
     ax.set_ylim(gain_map.kd_grid[0], gain_map.kd_grid[-1])
     ax.set_title(f"Linear heading step over (K_p, K_d), speed {p.speed:g}, {p.side} side")
