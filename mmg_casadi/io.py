@@ -12,6 +12,7 @@ import json
 import math
 import os
 import tempfile
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -58,6 +59,39 @@ def write_json(path, obj) -> Path:
     tmp.write_text(json.dumps(json_safe(obj), indent=2))
     tmp.replace(path)
     return path
+
+
+def read_toml(path, what: str, cls=InputError) -> dict:
+    """The TOML file ``path`` parsed, or one ``cls`` error: a missing or unreadable file (field: the path), text
+    that is not UTF-8 or not valid TOML, arrays nested too deep included (field ``"toml"``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    what : str
+        What the file is, for the message (``"scenario"`` gives "an existing, readable scenario file").
+    cls : type
+        Error type raised (:class:`~mmg_casadi.errors.InputError` or a subclass).
+
+    Examples
+    --------
+    >>> read_toml("missing.toml", "scenario")
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.InputError: missing.toml: expected an existing, readable scenario file, got 'No such file or directory'
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise cls(str(path), f"an existing, readable {what} file", err.strerror or str(err)) from None
+    except UnicodeDecodeError as err:
+        raise cls("toml", f"UTF-8 text in {path}", str(err)) from None
+    try:
+        return tomllib.loads(text)
+    except (tomllib.TOMLDecodeError, RecursionError) as err:  # RecursionError: arrays nested too deep
+        raise cls("toml", f"valid TOML in {path}", str(err)) from None
 
 
 def write_text(path, text: str) -> Path:

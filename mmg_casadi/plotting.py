@@ -256,7 +256,7 @@ def plot_paths(result, ax, *, title=None):
     for w in sc.walls:
         pts = np.asarray(w.points)
         ax.plot(pts[:, 1], pts[:, 0], "k-", lw=2)
-    draw_land(ax, getattr(sc, "land", ()))
+    draw_land(ax, sc.land)
     # R_safe circle around the own ship at its closest approach
     own = result.metrics["ships"][0]
     if N + len(sc.obstacles) > 1:
@@ -408,7 +408,7 @@ def plot_fleet(result, path=None, *, title=None, ax=None) -> Figure:
             ax.plot(traj.state("y", i)[k], traj.state("x", i)[k], "kx", ms=6, mew=1.5)
     for o in sc.obstacles:
         ax.plot(o.position[1], o.position[0], "ks", ms=2.5)
-    draw_land(ax, getattr(sc, "land", ()))
+    draw_land(ax, sc.land)
     marine_axes(ax)
     ships = result.metrics["ships"]
     n_col = sum(s["collided"] for s in ships)

@@ -187,7 +187,7 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
     for w in sc.walls:
         pts = np.asarray(w.points, float)
         walls += [(a[0], a[1], b[0], b[1]) for a, b in zip(pts[:-1], pts[1:])]
-    land = [(a[0], a[1], b[0], b[1]) for poly in getattr(sc, "land", ()) for a, b in poly.edges]
+    land = [(a[0], a[1], b[0], b[1]) for poly in sc.land for a, b in poly.edges]
     walls += land  # land edges are the last wall segments (Layout.n_land)
     check_size(len(sc.ships), len(sc.obstacles), len(walls), cls=ScenarioError)
     check_steps(resolved["t_max"], resolved["dt"], cls=error or ParameterError, ships=len(sc.ships))

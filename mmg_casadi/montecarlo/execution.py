@@ -63,9 +63,6 @@ from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.closed_loop.problem import ClosedLoopModel, build_problem
 from mmg_casadi.colregs.profiles import scoring_profile
-from mmg_casadi.colregs.kinematics import ground_velocity
-from mmg_casadi.colregs.risk import risk_of_collision
-from mmg_casadi.colregs.score import cpa_tcpa
 from mmg_casadi.colregs.scorer import score_encounters
 from mmg_casadi.montecarlo.encounter_summary import format_verdicts
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
@@ -211,9 +208,8 @@ def own_ship_encounters(t, states, profile=None) -> dict:
     one run: the own ship's (ship 0) encounters with a risk of collision, judged by
     :func:`~mmg_casadi.colregs.scorer.score_encounters`.
 
-    Only the ships with a risk of collision with the own ship at some sample
-    (:func:`~mmg_casadi.colregs.risk.risk_of_collision`, evaluated for all ships at once) are scored: a ship
-    without one has no encounter and no duty, so the verdicts are those of scoring every ship.
+    Only the ships that come within the profile's risk range ``r_risk`` of the own ship while both sail are
+    scored (a ship farther away has no risk of collision and no duty; the verdicts are the same).
 
     Parameters
     ----------
@@ -249,15 +245,11 @@ def own_ship_encounters(t, states, profile=None) -> dict:
     t = np.asarray(t, float)
     states = np.asarray(states, float)
     mask = sailing_mask(states[:, :, 3])
-    ships, risky = [0], []
-    if states.shape[1] > 1 and t.size > 1:  # one sample has no velocity, hence no risk of collision
-        pos = states[:, :, :2]
-        vel = ground_velocity(t, pos)
-        d = pos[:, 1:] - pos[:, :1]
-        cpa, tcpa = cpa_tcpa(d, vel[:, 1:] - vel[:, :1])
-        gate = risk_of_collision(cpa, tcpa, np.hypot(d[..., 0], d[..., 1]), mask[:, :1] & mask[:, 1:], profile)
-        ships += [int(j) for j in 1 + np.flatnonzero(gate.any(axis=0))]
-    if len(ships) > 1:
+    dist = np.linalg.norm(states[:, 1:, :2] - states[:, :1, :2], axis=2)
+    near = np.any((dist <= profile.r_risk) & mask[:, :1] & mask[:, 1:], axis=0)
+    ships = [0, *(1 + np.flatnonzero(near))]
+    risky = []
+    if len(ships) > 1 and t.size > 1:  # one sample has no velocity, hence no risk of collision
         risky = [e for e in score_encounters(t, states[:, ships, :2], states[:, ships, 2], active=mask[:, ships],
                                              profile=profile, own=0) if e.applicable and e.compliant is not None]
     lawful = sum(1 for e in risky if e.compliant)

@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.scenarios.scenario import LandSpec
 
 ENVIRONMENT = 6
 """The strait's environment number."""
@@ -85,14 +86,14 @@ def shores(width: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def route_clearance(a, b, polygon) -> float:
-    """Least distance (L) between the segment ``a``–``b`` and a convex polygon's boundary; 0 if they cross.
+    """Least distance (L) between the segment ``a``–``b`` and a polygon's boundary; 0 if the segment enters it.
 
     Parameters
     ----------
     a, b : array-like (2,)
         Ends of the route.
     polygon : array-like (K, 2)
-        Vertices of a convex polygon, in order.
+        Vertices of the polygon, in order.
 
     Examples
     --------
@@ -101,22 +102,15 @@ def route_clearance(a, b, polygon) -> float:
     (2.0, 0.0)
     """
     a, b, poly = np.asarray(a, float), np.asarray(b, float), np.asarray(polygon, float)
-    t = np.linspace(0.0, 1.0, 401)[:, None]
-    pts = a + t * (b - a)
-    edges = list(zip(poly, np.roll(poly, -1, axis=0)))
-    inside = np.ones(len(pts), bool)
+    pts = a + np.linspace(0.0, 1.0, 401)[:, None] * (b - a)
+    if LandSpec(poly).contains(pts).any():
+        return 0.0
     best = np.inf
-    for p, q in edges:
+    for p, q in zip(poly, np.roll(poly, -1, axis=0)):
         e = q - p
         s = np.clip(((pts - p) @ e) / (e @ e), 0.0, 1.0)[:, None]
         best = min(best, float(np.min(np.linalg.norm(pts - (p + s * e), axis=1))))
-        cross = e[0] * (pts[:, 1] - p[1]) - e[1] * (pts[:, 0] - p[0])
-        inside &= cross >= 0 if _area(poly) > 0 else cross <= 0
-    return 0.0 if inside.any() else best
-
-
-def _area(poly) -> float:
-    return 0.5 * float(np.sum(poly[:, 0] * np.roll(poly[:, 1], -1) - np.roll(poly[:, 0], -1) * poly[:, 1]))
+    return best
 
 
 def sample_strait(run: int, base_seed: int = 0, speed_range=(0.5, 1.0)):

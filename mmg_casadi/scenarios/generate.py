@@ -88,7 +88,7 @@ from mmg_casadi.colregs.profiles import SCORING_PROFILES, scoring_profile
 from mmg_casadi.colregs.scorer import score_encounters
 from mmg_casadi.errors import InputError, ScenarioError
 from mmg_casadi.guidance import methods as registry
-from mmg_casadi.io import write_text
+from mmg_casadi.io import read_toml, write_text
 from mmg_casadi.params import check_value
 from mmg_casadi.scenarios.maritime_export import dump_traffic_situation
 from mmg_casadi.scenarios.scenario import SPEED_RANGE, Scenario, Settings, dump_scenario, scenario_from_dict
@@ -446,18 +446,7 @@ def load_description(path) -> Description:
     InputError
         A missing or unreadable file (its field is the path), invalid TOML (field ``toml``) or a malformed entry.
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise InputError(str(path), "an existing, readable description file", err.strerror or str(err)) from None
-    except UnicodeDecodeError as err:
-        raise InputError("toml", f"UTF-8 text in {path}", str(err)) from None
-    try:
-        d = tomllib.loads(text)
-    except (tomllib.TOMLDecodeError, RecursionError) as err:
-        raise InputError("toml", f"valid TOML in {path}", str(err)) from None
-    return description_from_dict(d, source=str(path))
+    return description_from_dict(read_toml(path, "description"), source=str(path))
 
 
 STANDARD = "standard_encounters.toml"

@@ -65,11 +65,13 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import tomli_w
 
 from mmg_casadi.vessel.library import VESSELS
 from mmg_casadi.guidance import methods
 from mmg_casadi.errors import ParameterError, ScenarioError, check_range
+from mmg_casadi.io import read_toml
 from mmg_casadi.params import PARAMETERS, check_value, resolve
 
 SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_tolerance")
@@ -323,20 +325,26 @@ class LandSpec:
         """The polygon's edges as pairs of end points (L), the closing edge last."""
         return tuple(zip(self.points, self.points[1:] + self.points[:1]))
 
-    def contains(self, point) -> bool:
-        """Whether ``point`` (x, y) lies inside the polygon (even-odd rule; a point on an edge may go either way).
+    def contains(self, points):
+        """Whether each point lies inside the polygon (even-odd rule; a point on an edge may go either way).
 
         Parameters
         ----------
-        point : (float, float)
-            The point (L).
+        points : array-like (2,) or (K, 2)
+            One point (x, y) or K points (L).
+
+        Returns
+        -------
+        bool or numpy.ndarray of bool (K,)
+            For one point a bool, for K points an array.
         """
-        x, y = float(point[0]), float(point[1])
-        inside = False
+        pts = np.asarray(points, dtype=float)
+        x, y = np.atleast_2d(pts)[:, 0], np.atleast_2d(pts)[:, 1]
+        inside = np.zeros(x.shape, bool)
         for (ax, ay), (bx, by) in self.edges:
-            if (ay > y) != (by > y) and x < ax + (y - ay) * (bx - ax) / (by - ay):
-                inside = not inside
-        return inside
+            if ay != by:  # a horizontal edge crosses no ray
+                inside ^= ((ay > y) != (by > y)) & (x < ax + (y - ay) * (bx - ax) / (by - ay))
+        return bool(inside[0]) if pts.ndim == 1 else inside
 
 
 @dataclass(frozen=True)
@@ -745,18 +753,7 @@ def load_scenario(path) -> Scenario:
     >>> [ship.start for ship in s.ships]
     [(0.0, 0.0), (50.0, 0.0)]
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise ScenarioError(str(path), "an existing, readable scenario file", err.strerror or str(err)) from None
-    except UnicodeDecodeError as err:
-        raise ScenarioError("toml", f"UTF-8 text in {path}", str(err)) from None
-    try:
-        d = tomllib.loads(text)
-    except (tomllib.TOMLDecodeError, RecursionError) as err:  # RecursionError: arrays nested too deep
-        raise ScenarioError("toml", f"valid TOML in {path}", str(err)) from None
-    return scenario_from_dict(d, source=str(path))
+    return scenario_from_dict(read_toml(path, "scenario", ScenarioError), source=str(path))
 
 
 def with_method(s: Scenario, method: str) -> Scenario:

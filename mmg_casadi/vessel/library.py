@@ -109,7 +109,7 @@ def load_vessel(name: str | Path = DEFAULT, field: str = "vessel") -> Vessel:
         raise InputError(field, f"one of: {', '.join(VESSELS)} (or a vessel .toml file)", name)
     try:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, RecursionError) as e:  # RecursionError: nested too deep
         raise InputError(field, "a readable vessel TOML file", f"{path} ({e})") from None
     return _vessel_from(path.stem, raw, str(path))
 
