@@ -1,7 +1,7 @@
 """Sphinx configuration of the mmg-casadi documentation (``make docs``).
 
 Everything that is built from code happens at build time: the API reference (autosummary over the packages), the
-parameter table (:func:`mmg_casadi.params.markdown_table`), the three notebooks (executed by myst-nb) and the
+parameter table (:func:`mmg_casadi.params.markdown_table`), the four notebooks (executed by myst-nb) and the
 gallery (the scripts in ``docs/gallery/`` run with short horizons). Warnings are errors (``-W --keep-going``).
 """
 
@@ -45,8 +45,10 @@ autoclass_content = "class"
 numpydoc_show_class_members = False   # the module page's summary table lists them
 numpydoc_class_members_toctree = False
 numpydoc_xref_param_type = False
-# Undocumented or unknown arguments and public objects without a docstring are build warnings (hence errors).
-numpydoc_validation_checks = {"PR01", "PR02", "GL08"}
+# Undocumented or unknown arguments, public objects without a docstring, a function that returns a value without a
+# Returns section (a generator without Yields) and a return value without a description are build warnings (hence
+# errors); tests/test_docs.py checks the return values without a build.
+numpydoc_validation_checks = {"PR01", "PR02", "GL08", "RT01", "RT03", "YD01"}
 # Known debt: objects that predate the docs build and do not document every argument yet. The list may only
 # shrink (tests/test_docs.py checks that each entry still fails and that the flat public API is not on it).
 numpydoc_validation_exclude = {

@@ -15,7 +15,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import shutil
 import sys
+import tempfile
 import tomllib
 from pathlib import Path
 
@@ -26,13 +28,14 @@ from mmg_casadi.limits import MAX_SHIPS, check_runs, check_steps
 from mmg_casadi.montecarlo.disturbance_sampling import parse_range
 from mmg_casadi.montecarlo.sampling import parse_envs, sample_traffic
 from mmg_casadi.params import PARAMETERS, check_value, help_text, load_file, markdown_table
-from mmg_casadi.scenarios.ais_replay import ais_scenario, load_ais_csv
+from mmg_casadi.determinism import compare_outputs
+from mmg_casadi.scenarios.ais_replay import TARGETS, ais_scenario, load_ais_csv, parse_time
 from mmg_casadi.scenarios.generate import generate, load_description, override, standard_description, write_set
 from mmg_casadi.scenarios.interchange import convert_file
 from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
 from mmg_casadi.scenarios.run import packaged_names, packaged_scenario, packaged_scenarios, run_scenario
 from mmg_casadi.scenarios.scenario import dump_scenario, load_scenario, scenario_from_dict, with_method
-from mmg_casadi.signals import exit_status, signal_name, terminate_as_interrupt
+from mmg_casadi.signals import end_deferred_signals, exit_status, signal_name, terminate_as_interrupt
 from mmg_casadi.vessel.library import load_vessel, vessel_table
 from mmg_casadi.vessel.maneuvers import speed_change, turning_circle, validate_maneuver_args, zigzag
 
@@ -101,13 +104,25 @@ def _add_params(p: argparse.ArgumentParser) -> None:
                    help="one parameter (repeatable; wins over --params), e.g. --set r_safe=10")
 
 
+def _add_determinism(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--check-determinism", action="store_true", help="run a second time into a temporary folder "
+                   "and compare the outputs (.csv, .json, .toml, .npz) outside the timing columns: print the "
+                   "first difference and exit 1, or say they are identical")
+
+
 def _add_methods(p: argparse.ArgumentParser) -> None:
     p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.NAMES)} "
                    "(default: those the study compares)")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The ``mmg-casadi`` argument parser (one sub-parser per command, study and tuning)."""
+    """The ``mmg-casadi`` argument parser (one sub-parser per command, study and tuning).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser, with a required sub-command.
+    """
     p = _Parser(prog="mmg-casadi", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", parser_class=_Parser,
                            metavar="{maneuver,vessels,identify,simulate,scenarios,study,tune,convert,traffic,"
@@ -142,6 +157,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--method", help=f"override settings.method: {', '.join(registry.NAMES)}")
     _add_params(s)
     s.add_argument("--out", type=_path, required=True, help="output directory")
+    _add_determinism(s)
 
     sub.add_parser("scenarios", help="list the packaged scenarios (name, ships, method, description)")
 
@@ -153,6 +169,7 @@ def build_parser() -> argparse.ArgumentParser:
                                             "a claim-by-claim report"}.get(name, f"the {name} study"))
         sp.add_argument("--out", type=_path, required=True, help="output directory")
         _add_params(sp)
+        _add_determinism(sp)
         if name not in ("waypoint-square", "all", "paper"):
             _add_methods(sp)
         if name == "paper":
@@ -189,6 +206,9 @@ def build_parser() -> argparse.ArgumentParser:
                             "direction uniform), e.g. 0-15")
             sp.add_argument("--targets", default=None, help="avoid | hold: the sampled target ships avoid with "
                             "the study's method (default) or hold course and speed (same as --set targets=VALUE)")
+            sp.add_argument("--vessels", default=None, help="hulls of the sampled target ships: own (default, the "
+                            "own ship's), a vessel name, or two separated by a comma that the targets take in turn, "
+                            "e.g. kvlcc2,kcs (mixed traffic; same as --set target_vessels=VALUE)")
         if name == "sweep":
             sp.add_argument("--param", required=True, help="the swept parameter (see `mmg-casadi params`)")
             sp.add_argument("--values", required=True, help="comma-separated values, e.g. 10,15,20,25")
@@ -209,6 +229,8 @@ def build_parser() -> argparse.ArgumentParser:
     tp.add_argument("--tracking-tolerance", dest="tracking_tolerance", type=_float, default=0.0,
                     help="recommended gains may track the waypoint square this much worse (relative CE, MCTE) "
                     "than the paper's gains (default 0)")
+    tp.add_argument("--vessel", default="kcs", help="hull: a name of `mmg-casadi vessels` or a vessel .toml file "
+                    "(default kcs); speeds are fractions of its design speed, times in its L/U_des")
     tp.add_argument("--out", type=_path, required=True, help="output directory")
     ta = tunes.add_parser("apf", help="gradient-based tuning of the modified sink-vortex field")
     ta.add_argument("--train", type=_int, default=195, help="sampled training scenarios, environments 3-5 "
@@ -246,12 +268,17 @@ def build_parser() -> argparse.ArgumentParser:
     ge.add_argument("--seed", type=_int, default=None, help="seed of the set (replaces set.seed)")
     ge.add_argument("--out", type=_path, required=True, help="output directory")
 
-    rp = sub.add_parser("replay", help="AIS tracks (.csv) as a scenario file: the targets retrace their recorded "
-                        "routes, the own ship sails hers with a method")
-    rp.add_argument("file", type=_path, help="CSV of AIS reports with the columns mmsi, time, lat, lon")
+    rp = sub.add_parser("replay", help="AIS tracks (.csv) as a scenario file: the targets replay their recorded "
+                        "tracks, the own ship sails hers with a method from a chosen moment")
+    rp.add_argument("file", type=_path, help="CSV of AIS reports with the columns mmsi, time, lat, lon (or a .json "
+                    "list of report objects with these keys)")
     rp.add_argument("--own", required=True, help="MMSI of the own ship")
     rp.add_argument("--step", type=_float, default=60.0, help="resampling step of the routes [s] (default 60)")
     rp.add_argument("--method", default=registry.DEFAULT, help="the own ship's method")
+    rp.add_argument("--targets", default="track", help="track | route: the targets replay their recorded tracks "
+                    "exactly, interpolated in time (default), or retrace their routes by waypoint tracking")
+    rp.add_argument("--start", default=None, help="time at which the own ship starts from her recorded state "
+                    "(seconds or ISO 8601 as in the file; default her first report)")
     rp.add_argument("--out", type=_path, required=True, help="output scenario file (.toml)")
 
     pp = sub.add_parser("params", help="list every parameter (default, allowed values, unit, meaning, source)")
@@ -268,7 +295,9 @@ def _params_of(a) -> dict | None:
     out.update(dict(_setting(s) for s in getattr(a, "settings", [])))
     if getattr(a, "study", None) == "statistics" and a.targets is not None:
         out["targets"] = check_value("targets", a.targets, field="--targets", cls=InputError)
-    for key in ("targets", "target_slowdown"):
+    if getattr(a, "study", None) == "statistics" and a.vessels is not None:
+        out["target_vessels"] = check_value("target_vessels", a.vessels, field="--vessels", cls=InputError)
+    for key in ("targets", "target_slowdown", "target_vessels"):
         if key in out and (a.command, getattr(a, "study", None)) not in _TARGETS_APPLY:
             raise InputError(key, "nothing outside `study statistics` and `study sweep` (it sets what their "
                              "sampled target ships do)", out[key])
@@ -276,7 +305,7 @@ def _params_of(a) -> dict | None:
 
 
 _TARGETS_APPLY = {("study", "statistics"), ("study", "sweep")}
-"""Commands whose sampled scenarios read the parameters ``targets`` and ``target_slowdown``."""
+"""Commands whose sampled scenarios read the parameters ``targets``, ``target_slowdown`` and ``target_vessels``."""
 
 
 def _maneuver(a) -> dict:
@@ -359,7 +388,8 @@ def _study(a) -> dict:
 def _tune(a) -> dict:
     if a.what == "pd":
         from tuning import cli_pd  # python-control and the tuning stack: only for 'tune'
-        return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn, tracking_tolerance=a.tracking_tolerance)
+        return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn, tracking_tolerance=a.tracking_tolerance,
+                          vessel=a.vessel)
     from tuning import cli_apf  # the tuning stack: only for 'tune'
     try:
         envs = tuple(parse_envs(a.holdout_envs))
@@ -371,8 +401,11 @@ def _tune(a) -> dict:
 
 
 def _convert(a) -> dict:
-    return convert_file(a.file, a.out, method=a.method, target_method=a.target_method,
-                        length_scale=a.length_scale, reference=a.reference)
+    out = convert_file(a.file, a.out, method=a.method, target_method=a.target_method,
+                       length_scale=a.length_scale, reference=a.reference)
+    for line in out.get("hulls", []):
+        print(line)
+    return out
 
 
 def _generate(a) -> dict:
@@ -388,12 +421,34 @@ def _generate(a) -> dict:
 def _replay(a) -> dict:
     if a.out.suffix.lower() != ".toml":
         raise InputError("--out", "a scenario file name ending in .toml", str(a.out))
-    sc, report = ais_scenario(load_ais_csv(a.file), a.own, step_s=a.step, method=a.method)
+    start = None if a.start is None else parse_time(a.start, "--start")
+    if a.targets not in TARGETS:
+        raise InputError("--targets", f"one of: {', '.join(TARGETS)}", a.targets)
+    sc, report = ais_scenario(load_ais_csv(a.file), a.own, step_s=a.step, method=a.method, targets=a.targets,
+                              start=start)
     write_text(a.out, dump_scenario(sc))
     gone = ", ".join(f"{k} ({v})" for k, v in report["left_out"].items())
     print(f"{a.out}: {len(sc.ships)} ships over {report['duration']:g} s" + (f"; left out: {gone}" if gone else "")
           + (f"; {report['clipped_legs']} legs clipped to the allowed speeds" if report["clipped_legs"] else ""))
     return report
+
+
+def _check_determinism(a, handler) -> int:
+    """Run the parsed command ``a`` a second time into a temporary folder beside ``a.out`` and compare the two
+    outputs (:func:`mmg_casadi.determinism.compare_outputs`); returns the exit status (0 identical, 1 not)."""
+    parent = a.out.resolve().parent
+    tmp = Path(tempfile.mkdtemp(prefix=".determinism-", dir=parent if parent.is_dir() else None))
+    try:
+        print(f"determinism: running the command again into {tmp}", file=sys.stderr)
+        handler(argparse.Namespace(**{**vars(a), "out": tmp}))
+        diff, n = compare_outputs(a.out, tmp)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    if diff:
+        print(f"mmg-casadi: determinism: the two runs differ: {diff}", file=sys.stderr)
+        return 1
+    print(f"determinism: the two runs wrote identical outputs ({n} files compared; timing columns excluded)")
+    return 0
 
 
 def _traffic(a) -> dict:
@@ -477,12 +532,18 @@ def main(argv=None) -> int:
     ----------
     argv : list of str, optional
         Command-line arguments without the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 on success, 2 for invalid input, 1 for a run error, and the signal's status after an interruption.
     """
     parser = build_parser()
     a = None
     try:
         with terminate_as_interrupt():
             a, extra = parser.parse_known_args(argv)
+            end_deferred_signals()  # a signal received while the package loaded (mmg_casadi/__init__.py)
             if extra:
                 prog = "mmg-casadi " + " ".join(x for x in (a.command, getattr(a, "study", None),
                                                              getattr(a, "what", None)) if x)
@@ -493,6 +554,8 @@ def main(argv=None) -> int:
                         "params": _params,
                         "scenarios": _scenarios, "vessels": _vessels, "identify": _identify}
             handlers[a.command](a)
+            if getattr(a, "check_determinism", False):
+                return _check_determinism(a, handlers[a.command])
     except _CliError as e:
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
         return 2

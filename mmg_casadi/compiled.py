@@ -42,7 +42,13 @@ STOP_TIMEOUT = 10.0
 
 
 def cache_dir() -> Path:
-    """Directory holding compiled libraries (created on demand)."""
+    """Directory holding compiled libraries (created on demand).
+
+    Returns
+    -------
+    pathlib.Path
+        ``$MMG_CASADI_CACHE`` if set, else ``~/.cache/mmg-casadi``.
+    """
     d = Path(os.environ.get("MMG_CASADI_CACHE", Path.home() / ".cache" / "mmg-casadi"))
     d.mkdir(parents=True, exist_ok=True)
     return d
@@ -64,6 +70,11 @@ def generate_source(f: ca.Function, also=()) -> str:
         Function to generate C code for.
     also : sequence of casadi.Function, optional
         Further Functions exported by the same source (code they share with ``f`` is generated once).
+
+    Returns
+    -------
+    str
+        The C source.
     """
     with tempfile.TemporaryDirectory() as tmp:
         cg = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False, "casadi_int": "long long int"})
@@ -84,6 +95,13 @@ def library_path(f: ca.Function, flags=DEFAULT_FLAGS, also=()) -> tuple[Path, st
         C compiler flags; they are part of the cache key.
     also : sequence of casadi.Function, optional
         Further Functions in the same library (:func:`generate_source`).
+
+    Returns
+    -------
+    path : pathlib.Path
+        ``<cache_dir>/<name>_<key>.so``, ``key`` a hash of the source, the flags and the CasADi version.
+    source : str
+        The C source (:func:`generate_source`).
     """
     src = generate_source(f, also)
     key = hashlib.sha256((src + "\0" + " ".join(flags) + "\0" + ca.__version__).encode()).hexdigest()[:16]
@@ -108,6 +126,11 @@ def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
         C compiler flags passed to the compiler.
     also : sequence of casadi.Function, optional
         Further Functions to compile into the same library.
+
+    Returns
+    -------
+    casadi.Function or list of casadi.Function
+        The compiled Function (``casadi.external``), or with ``also`` one per Function, ``f`` first.
 
     Examples
     --------

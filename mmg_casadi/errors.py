@@ -99,6 +99,11 @@ def check_range(field: str, value, low=None, high=None, *, low_open=False, high_
     unit : str, default ''
         Unit shown after the bounds in the error message.
 
+    Returns
+    -------
+    float
+        ``float(value)``.
+
     Examples
     --------
     >>> check_range("delta", 2.0, 0.0, None, low_open=True)

@@ -68,6 +68,11 @@ def read_timeseries(path: str | Path) -> dict[str, np.ndarray]:
     ----------
     path : str or pathlib.Path
         CSV file.
+
+    Returns
+    -------
+    dict of numpy.ndarray
+        Each column of :data:`COLUMNS` (and ``run`` if present) to its values, one per data row, in SI units.
     """
     path = Path(path)
     if not path.is_file():
@@ -103,6 +108,11 @@ def split_runs(data: dict[str, np.ndarray]) -> list[dict[str, np.ndarray]]:
     ----------
     data : dict of numpy.ndarray
         Columns as from :func:`read_timeseries`.
+
+    Returns
+    -------
+    list of dict of numpy.ndarray
+        One dict of columns per experiment (without ``run``), in increasing ``run`` order.
     """
     if "run" not in data:
         runs = [data]
@@ -121,6 +131,11 @@ def noise_estimate(y: np.ndarray) -> float:
     ----------
     y : numpy.ndarray
         Uniformly sampled signal.
+
+    Returns
+    -------
+    float
+        The standard deviation, in the units of ``y`` (at least 1e-9).
     """
     d2 = np.diff(y, 2)
     return float(max(np.median(np.abs(d2 - np.median(d2))) / (0.6745 * math.sqrt(6.0)), 1e-9))
@@ -172,11 +187,23 @@ class Identification:
         ----------
         level_z : float, default 1.96
             Number of standard errors.
+
+        Returns
+        -------
+        numpy.ndarray (p, 2)
+            Lower and upper ends for each free coefficient (prime-II, like :attr:`estimate`).
         """
         return np.column_stack([self.estimate - level_z * self.std_error, self.estimate + level_z * self.std_error])
 
     def report(self) -> dict:
-        """JSON-ready summary: estimates, standard errors, 95 % intervals, correlation, residuals."""
+        """JSON-ready summary: estimates, standard errors, 95 % intervals, correlation, residuals.
+
+        Returns
+        -------
+        dict
+            ``status``, ``coefficients`` (per name ``base``, ``estimate``, ``std_error``, ``ci95``), ``correlation``
+            (``names`` and ``matrix``), ``residual_rms`` and ``sigma`` per channel, and ``units``.
+        """
         ci = self.interval()
         return {
             "status": self.status,
@@ -254,6 +281,12 @@ def identify(runs: list[dict], vessel: str | Path | Vessel, free, *, sigma: dict
         RK4 steps per sample interval.
     max_iter : int, default 200
         IPOPT iteration limit.
+
+    Returns
+    -------
+    Identification
+        Estimates, standard errors, correlation, residual RMS, noise levels, IPOPT status, the fitted ship and the
+        fitted state histories.
     """
     v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
     ship = v.ship
@@ -346,6 +379,11 @@ def vessel_toml(base: str | Path, result: Identification, source: str) -> str:
         The fit.
     source : str
         What the coefficients were fitted to (named in the header).
+
+    Returns
+    -------
+    str
+        The TOML text, a two-line ``# IDENTIFIED`` header first.
     """
     text = data_path(base).read_text() if isinstance(base, str) and not str(base).endswith(".toml") else \
         Path(base).read_text(encoding="utf-8")
@@ -376,6 +414,12 @@ def identify_to_dir(data: str | Path, vessel: str | Path, free, out: str | Path)
         Coefficients to fit.
     out : str or pathlib.Path
         Output directory.
+
+    Returns
+    -------
+    dict
+        :meth:`Identification.report` with ``vessel_file`` (the TOML path) and ``summary`` (per coefficient
+        ``"estimate ± s.e. (base b)"``, plus ``status`` and ``vessel_file``), as written to ``identification.json``.
     """
     v = load_vessel(vessel)
     runs = split_runs(read_timeseries(data))
@@ -403,6 +447,12 @@ def maneuver_timeseries(result, vessel: Vessel, rpm: float) -> dict[str, np.ndar
         Its vessel.
     rpm : float
         Its propeller speed (rev/min).
+
+    Returns
+    -------
+    dict of numpy.ndarray
+        ``t`` (s), ``u``, ``v`` (m/s), ``r`` (rad/s), ``psi``, ``delta`` (rad) and ``rpm`` (rev/min), one value per
+        sample.
     """
     s = vessel.ship
     U, L = s.U_design, s.L

@@ -8,9 +8,12 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import secrets
+import shutil
 import tempfile
 import tomllib
 from pathlib import Path
@@ -27,6 +30,11 @@ def json_safe(obj):
     ----------
     obj : object
         Nested dicts, lists, tuples, numbers, strings, numpy values.
+
+    Returns
+    -------
+    object
+        A copy with dicts, lists (for lists, tuples and arrays), Python numbers and None for non-finite floats.
     """
     if isinstance(obj, dict):
         return {k: json_safe(v) for k, v in obj.items()}
@@ -52,6 +60,11 @@ def write_json(path, obj) -> Path:
         Destination; its directory is created.
     obj : object
         What to write.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -73,6 +86,11 @@ def read_toml(path, what: str, cls=InputError) -> dict:
         What the file is, for the message (``"scenario"`` gives "an existing, readable scenario file").
     cls : type
         Error type raised (:class:`~mmg_casadi.errors.InputError` or a subclass).
+
+    Returns
+    -------
+    dict
+        The parsed TOML document.
 
     Examples
     --------
@@ -103,6 +121,11 @@ def write_text(path, text: str) -> Path:
         Destination.
     text : str
         UTF-8 text.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -194,3 +217,55 @@ def check_output(path, *, kind: str = "dir", field: str = "--out") -> Path:
             except OSError:
                 pass
     return path
+
+
+@contextlib.contextmanager
+def staged_directory(out):
+    """Write a directory's files all or none: yield a fresh hidden sibling folder of ``out`` to write into, then
+    move its files into ``out`` when the block ends normally; on any exception (Ctrl-C, SIGTERM raised as
+    :class:`KeyboardInterrupt`, a full disk) remove the folder and re-raise, leaving ``out`` as it was.
+
+    A new or empty ``out`` is replaced by the folder in one rename; into an ``out`` that holds files already, each
+    file is moved by an atomic :func:`os.replace`, so no file of ``out`` is ever partly written.
+
+    Parameters
+    ----------
+    out : str or Path
+        The output directory (its parent is created).
+
+    Yields
+    ------
+    Path
+        The folder to write the files into (``<parent>/.<name>.tmp-<pid>-<random>``).
+
+    Examples
+    --------
+    >>> import pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> with staged_directory(d / "run") as tmp:
+    ...     _ = (tmp / "a.txt").write_text("a")
+    >>> sorted(p.name for p in d.iterdir()), (d / "run" / "a.txt").read_text()
+    (['run'], 'a')
+    >>> try:
+    ...     with staged_directory(d / "run") as tmp:
+    ...         _ = (tmp / "a.txt").write_text("b")
+    ...         raise KeyboardInterrupt
+    ... except KeyboardInterrupt:
+    ...     pass
+    >>> sorted(p.name for p in d.iterdir()), (d / "run" / "a.txt").read_text()
+    (['run'], 'a')
+    """
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.parent / f".{out.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}"
+    tmp.mkdir()  # mkdir, not mkdtemp: the folder gets the usual permissions (umask), as out would
+    try:
+        yield tmp
+        try:
+            os.rename(tmp, out)  # out is new or an empty directory: all files appear at once
+        except OSError:
+            out.mkdir(exist_ok=True)
+            for f in sorted(tmp.iterdir()):
+                os.replace(f, out / f.name)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)

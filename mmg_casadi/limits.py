@@ -64,6 +64,11 @@ def check_steps(t_max: float, dt: float, cls=ParameterError, ships: int = 1) -> 
     ships : int, default 1
         Ships of the run.
 
+    Returns
+    -------
+    int
+        The number of guidance steps.
+
     Examples
     --------
     >>> check_steps(300.0, 0.25, ships=2000)
@@ -107,7 +112,13 @@ def check_size(n_ships: int, n_obstacles: int, n_wall_segments: int, cls=InputEr
 
 
 def max_workers() -> int:
-    """The largest ``--workers`` on this machine: :data:`MAX_WORKERS_PER_CORE` × ``os.cpu_count()``."""
+    """The largest ``--workers`` on this machine: :data:`MAX_WORKERS_PER_CORE` × ``os.cpu_count()``.
+
+    Returns
+    -------
+    int
+        The limit.
+    """
     return MAX_WORKERS_PER_CORE * (os.cpu_count() or 1)
 
 
@@ -171,6 +182,11 @@ def check_runs(runs, field: str = "--runs") -> int:
         Runs per environment and method.
     field : str, default '--runs'
         Name of the input field, used in the error message.
+
+    Returns
+    -------
+    int
+        ``runs``.
     """
     if isinstance(runs, bool) or not isinstance(runs, int) or not 1 <= runs <= MAX_RUNS:
         raise InputError(field, f"an integer in [1, {MAX_RUNS}] (MAX_RUNS)", runs)

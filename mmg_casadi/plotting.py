@@ -35,6 +35,11 @@ def ship_outline(x: float, y: float, psi: float, length: float = 1.0, beam: floa
         Ship length (L).
     beam : float, default 0.14
         Ship beam (L).
+
+    Returns
+    -------
+    numpy.ndarray (5, 2)
+        Vertices of the outline, columns east (y) and north (x) (L), bow first.
     """
     body = np.array([[0.5, 0.0], [0.3, beam / 2], [-0.5, beam / 2], [-0.5, -beam / 2], [0.3, -beam / 2]]) * [
         length, 1.0]
@@ -182,6 +187,11 @@ def plot_maneuver(result, path=None) -> Figure:
         Result of the manoeuvre simulation.
     path : str or path-like, optional
         File to save the figure to.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (saved to ``path`` when given).
     """
     fig = Figure(figsize=(11, 5.5), layout="constrained")
     gs = fig.add_gridspec(3, 2, width_ratios=[1.1, 1])
@@ -230,6 +240,11 @@ def plot_paths(result, ax, *, title=None):
         Where to draw.
     title : str, optional
         Axes title (default: method, collision, own ship CE and MCTE).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        ``ax``.
     """
     traj, sc = result.trajectory, result.scenario
     N = traj.layout.n_ships
@@ -284,6 +299,11 @@ def plot_scenario(result, path=None, *, title=None) -> Figure:
         File to save the figure to.
     title : str, optional
         Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (saved to ``path`` when given).
     """
     traj, sc = result.trajectory, result.scenario
     N = traj.layout.n_ships
@@ -332,6 +352,11 @@ def plot_tracking(result, path=None) -> Figure:
         Result of the waypoint-tracking run.
     path : str or path-like, optional
         File to save the figure to.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (saved to ``path`` when given).
     """
     traj, sc = result.trajectory, result.scenario
     m = traj.sailing_mask()[:, 0]
@@ -387,6 +412,11 @@ def plot_fleet(result, path=None, *, title=None, ax=None) -> Figure:
         Axes title (default: ships, collisions, goals reached).
     ax : matplotlib Axes, optional
         Where to draw; a new figure when omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The new figure, or the figure of ``ax`` (saved to ``path`` when given).
     """
     traj, sc = result.trajectory, result.scenario
     N = traj.layout.n_ships

@@ -32,6 +32,11 @@ def progress_bar(total: int, *, desc: str = "", initial: int = 0, unit: str = "r
         Name of a unit.
     file : file-like, optional
         Where to write (default ``sys.stderr``).
+
+    Returns
+    -------
+    tqdm.tqdm
+        The bar, updated at most every 0.5 s on a terminal and every 30 s otherwise.
     """
     file = file or sys.stderr
     tty = hasattr(file, "isatty") and file.isatty()

@@ -197,6 +197,69 @@ def keep_termination_handlers(signals=TERMINATION_SIGNALS):
                 signal.signal(s, h)
 
 
+_DEFERRED: dict[int, object] = {}
+"""Signals whose handler :func:`defer_startup_signals` replaced, with the handler it replaced."""
+_RECEIVED: list[int] = []
+"""Signals received while deferred (the first is raised by :func:`end_deferred_signals`)."""
+
+
+def _record(signum, _frame):
+    _RECEIVED.append(signum)
+
+
+def defer_startup_signals(signals=(*TERMINATION_SIGNALS, signal.SIGINT)) -> None:
+    """Record, instead of acting on, the ``signals`` that arrive while the command line program starts.
+
+    Loading the package takes seconds (CasADi, NumPy, SciPy); a SIGTERM then (e.g. the first seconds of a cold
+    compile) would kill the process with no message, a Ctrl-C would print an import traceback. The package calls
+    this when it is loaded as the ``mmg-casadi`` program; the CLI's :func:`end_deferred_signals`, once its own
+    handlers are installed, raises the first signal recorded, which then takes the path of every interruption
+    (one line, exit status ``128 + signal``). Only a signal with its default handler is deferred (an ignored
+    SIGHUP, under ``nohup``, stays ignored). Outside the main thread nothing is changed.
+
+    Parameters
+    ----------
+    signals : iterable of int, optional
+        Signals to defer; default SIGTERM, SIGHUP and SIGINT.
+
+    Examples
+    --------
+    >>> defer_startup_signals([signal.SIGUSR1])
+    >>> os.kill(os.getpid(), signal.SIGUSR1)  # recorded, not acted on (SIGUSR1 would end the process)
+    >>> try:
+    ...     end_deferred_signals()
+    ... except KeyboardInterrupt as err:
+    ...     print(signal_name(err), signal.getsignal(signal.SIGUSR1) is signal.SIG_DFL)
+    SIGUSR1 True
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for s in signals:
+        current = signal.getsignal(s)
+        if current is signal.SIG_DFL or current is signal.default_int_handler:
+            _DEFERRED[s] = current
+            signal.signal(s, _record)
+
+
+def end_deferred_signals() -> None:
+    """Stop deferring (:func:`defer_startup_signals`): restore the handlers replaced (those that nobody has set
+    since, e.g. :func:`terminate_as_interrupt`), then raise :class:`Terminated` for the first signal recorded.
+
+    Raises
+    ------
+    Terminated
+        A deferred signal was received (a :class:`KeyboardInterrupt`; ``exit_status`` gives ``128 + signal``).
+    """
+    for s, previous in list(_DEFERRED.items()):
+        if signal.getsignal(s) is _record:
+            signal.signal(s, previous)
+        del _DEFERRED[s]
+    if _RECEIVED:
+        signum = _RECEIVED[0]
+        _RECEIVED.clear()
+        raise Terminated(signum)
+
+
 def _set_parent_death_signal(signum: int) -> bool:
     """``prctl(PR_SET_PDEATHSIG, signum)`` through libc; False where it is not available."""
     if not sys.platform.startswith("linux"):

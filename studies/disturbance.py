@@ -67,6 +67,12 @@ def beam(current: float, wind: float, heading_deg: float = 0.0) -> dict:
     heading_deg : float
         The ship's heading (degrees).
 
+    Returns
+    -------
+    dict
+        ``"current"``: ``current_speed`` and ``current_direction_deg`` (heading + 90°); ``"wind"``: ``wind_speed``
+        and ``wind_direction_deg`` (heading − 90°, the direction it comes from).
+
     Examples
     --------
     >>> beam(0.1, 15.0)["wind"]
@@ -93,6 +99,7 @@ def straight_leg(disturbance: dict, *, ilos_k: float, crab: bool = False, params
     Returns
     -------
     ScenarioResult
+        The simulated leg (:func:`mmg_casadi.scenarios.run.run_scenario`) with its trajectory and metrics.
     """
     d = {"settings": {"method": "none", "t_max": LEG_LENGTH + 20.0},
          "ships": [{"name": "own", "start": [0.0, 0.0], "heading": 0.0, "speed": 1.0,
@@ -109,6 +116,13 @@ def cross_track(result) -> tuple[np.ndarray, np.ndarray]:
     ----------
     result : ScenarioResult
         A run.
+
+    Returns
+    -------
+    t : numpy.ndarray
+        Times of the guidance steps while the own ship sails (L/U).
+    y_e : numpy.ndarray
+        Cross-track error at those times (L).
     """
     tr = result.trajectory
     m = tr.sailing_mask()[:-1, 0]
@@ -124,6 +138,11 @@ def steady_offset(result, window=STEADY_WINDOW) -> float:
         A straight-leg run still sailing at the end of ``window``.
     window : (float, float)
         Start and end time (L/U_des).
+
+    Returns
+    -------
+    float
+        The mean cross-track error (L, positive to starboard).
     """
     t, ye = cross_track(result)
     k = (t >= window[0]) & (t <= window[1])
@@ -138,7 +157,15 @@ def _at(result, time: float) -> float:
 
 
 def tuned_gains() -> tuple[float, float]:
-    """PD gains of ``tune pd`` at the design speed with the default specification (pole placement, ζ = 0.8)."""
+    """PD gains of ``tune pd`` at the design speed with the default specification (pole placement, ζ = 0.8).
+
+    Returns
+    -------
+    kp : float
+        Proportional gain K_p (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d (rad of rudder per U_des/L of yaw rate).
+    """
     d = design_pd(1.0, PdSpec())
     return float(d.kp), float(d.kd)
 
@@ -171,6 +198,12 @@ def run(out, *, methods=None, params=None, current: float = 0.1, wind: float = 1
         Beam current speed (fraction of the design speed).
     wind : float
         Beam true wind speed (m/s).
+
+    Returns
+    -------
+    dict
+        The metrics written to ``metrics.json``: ``params``, ``current``, ``wind_m_s``, ``disturbances``,
+        ``straight_leg``, ``square`` and ``encounters``.
     """
     check_value("current_speed", current, field="current", cls=InputError)
     check_value("wind_speed", wind, field="wind", cls=InputError)

@@ -63,6 +63,12 @@ def run(out, *, methods=None, params=None, targets: str = "both") -> dict:
         Parameter overrides for every run.
     targets : {"hold", "avoid", "both"}
         Targets hold course and speed, avoid with the own ship's method, or both in turn.
+
+    Returns
+    -------
+    dict
+        The metrics written to ``metrics.json``: ``params``, ``cases`` and ``results`` (per target behaviour and
+        method the safe cases, risky encounters and kept ones, and per case its outcome).
     """
     if targets not in TARGETS + ("both",):
         raise InputError("targets", "one of: hold, avoid, both", targets)

@@ -555,6 +555,11 @@ def claims_markdown(claims, *, runs: int | None = None) -> str:
     runs : int, optional
         Runs per environment and method of the statistical analysis (stated in the header).
 
+    Returns
+    -------
+    str
+        The report, ending with a newline.
+
     Examples
     --------
     >>> print(claims_markdown([_claim("W1", "Waypoint tracking", "CE", 0.12, 0.13, None, "reproduced")]))

@@ -52,6 +52,11 @@ def parse_values(param: str, text, field: str = "values") -> list:
     field : str, default 'values'
         Name of the input field, used in the error message (e.g. ``"baseline"``).
 
+    Returns
+    -------
+    list
+        The checked values (int, float, bool or str), in the order given.
+
     Examples
     --------
     >>> parse_values("r_safe", "10, 15,20")
@@ -128,6 +133,12 @@ def run(out, *, param: str, values, baseline=None, runs: int = 200, envs="5", me
         Executor of :func:`~mmg_casadi.montecarlo.study.run_study`.
     address : str, optional
         Ray address.
+
+    Returns
+    -------
+    dict
+        The metrics written to ``metrics.json``: ``param``, ``values``, ``baseline``, ``runs``, ``envs``,
+        ``methods``, ``base_seed``, ``params`` and ``rows`` (the rows of ``sweep.csv``).
     """
     vals = parse_values(param, values)
     base_v = PARAMETERS[param].default if baseline is None else parse_values(param, [baseline], "baseline")[0]
@@ -199,6 +210,11 @@ def markdown(table: list, param: str) -> str:
         Rows of :func:`run`.
     param : str
         Swept parameter (column title).
+
+    Returns
+    -------
+    str
+        The table, ending with a newline.
     """
     lines = [f"| env | method | {param} | success [95 % CI] | Δ vs {_fmt(table[0]['baseline'])} [95 % CI] | "
              "McNemar p | collision / stalled / timeout / diverged | CE | MCTE |",
@@ -223,6 +239,11 @@ def plot_sweep(table: list, param: str, path) -> Figure:
         Swept parameter (axis label).
     path : str or Path
         Output image.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure, saved to ``path``.
     """
     fig = Figure(figsize=(10, 4), layout="constrained")
     ax, ax2 = fig.subplots(1, 2)

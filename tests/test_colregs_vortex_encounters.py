@@ -131,3 +131,41 @@ def test_held_targets_sail_without_a_method():
 def test_targets_option_is_refused_where_it_does_not_apply(argv, tmp_path, capsys):
     assert main(argv + ["--out", str(tmp_path / "out")]) == 2
     assert "targets" in capsys.readouterr().err
+
+
+def _speed_factor(nb_pos, nb_vel, **cv):
+    """The propeller-speed factor of colregs-vortex for one ship (own at the origin heading x at speed 1, goal
+    ahead), with the role judged now."""
+    import casadi as ca
+    from mmg_casadi.guidance.colregs_vortex import _field
+    kw = dict(lam_sink=-100.0, k_vor0=-10.0, r_safe=15.0, r_tol=2.0, gamma_max=5 * math.pi / 8, n_candidates=80)
+    _, factor, t = _field([0, 0], 0.0, [1, 0], [50, 0], ca.DM(nb_pos), ca.DM(nb_vel), ca.DM([[1]]), code=None,
+                          course=None, base=None, **kw, **ColregsVortexParams(**cv).as_dict())
+    return float(factor), int(t["escalate"])
+
+
+def test_speed_actions_of_rule_8e_and_17b():
+    # give-way to a ship 3 L off on the starboard bow crossing on a collision course (TCPA 3 < t_act): the
+    # alteration alone still leads into close quarters, so the give-way cut applies (off by default)
+    give_way = ([[3], [3]], [[0], [-1]])
+    assert _speed_factor(*give_way) == (1.0, 1)
+    assert _speed_factor(*give_way, speed_giveway=0.5) == (0.5, 1)
+    # in extremis: a ship crossing 4 L ahead; no heading within 45° clears her at full speed, one does at dead
+    # slow (she passes ahead), so the way is taken off; 5 L ahead a heading still clears her: no cut
+    assert _speed_factor([[4], [2]], [[0], [-1]], speed_extremis=1.0)[0] == 0.0
+    assert _speed_factor([[4], [2]], [[0], [-1]], speed_extremis=0.5)[0] == 0.5
+    assert _speed_factor([[5], [2]], [[0], [-1]], speed_extremis=1.0)[0] == 1.0
+    # the largest applicable cut wins
+    assert _speed_factor([[4], [2]], [[0], [-1]], speed_extremis=1.0, speed_giveway=0.5)[0] == 0.0
+
+
+def test_give_way_speed_cut_acts_through_the_engine():
+    # a ship crossing from starboard 5.6 L off at the start: late for a give-way turn alone
+    sc = crossing("colregs-vortex", [[5.0, -40.0]], start=(5.0, 2.5), heading=270.0)
+    n_off = run_scenario(sc).trajectory.state("n_prop", 0)
+    on = run_scenario(sc, {"cv_speed_giveway": 0.5})
+    n_on = on.trajectory.state("n_prop", 0)
+    assert np.ptp(n_off) == 0.0  # off by default: the service propeller speed throughout
+    # measured: down to 60.5 rpm of the 115.5 service (the engine's rate limit and lag), then back to service
+    assert n_on.min() < 0.6 * n_off[0] and n_on[-1] == pytest.approx(n_off[0])
+    assert not on.metrics["collision"] and on.metrics["ships"][0]["status"] == "reached"

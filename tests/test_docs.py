@@ -83,6 +83,140 @@ def test_public_function_finder_sees_the_flat_api():
     assert not any(".".join(n.split(".")[:-1]).split(".")[-1].startswith("_") for n in found)
 
 
+def public_methods():
+    """(qualified name, function) of every documented public method (static and class methods included) of every
+    public class of every public module, as the API pages list them (``:members:``: those with a docstring)."""
+    for pkg in PACKAGES:
+        root = importlib.import_module(pkg)
+        mods = [root] + [importlib.import_module(m.name) for m in pkgutil.walk_packages(root.__path__, f"{pkg}.")
+                         if not any(part.startswith("_") for part in m.name.split("."))]
+        for mod in mods:
+            for name, cls in vars(mod).items():
+                if name.startswith("_") or not inspect.isclass(cls) or cls.__module__ != mod.__name__:
+                    continue
+                for attr, member in vars(cls).items():
+                    func = member.__func__ if isinstance(member, (staticmethod, classmethod)) else member
+                    if not attr.startswith("_") and inspect.isfunction(func) and func.__doc__:
+                        yield f"{mod.__name__}.{cls.__qualname__}.{attr}", func
+
+
+def _section(doc: str, title: str) -> list[tuple[str, list[str]]] | None:
+    """Entries ``(head line, description lines)`` of the numpydoc section ``title`` of ``doc``; None without one."""
+    lines = inspect.cleandoc(doc or "").splitlines()
+    for k in range(len(lines) - 1):
+        if lines[k].strip() == title and lines[k + 1].strip() and set(lines[k + 1].strip()) == {"-"}:
+            entries: list[tuple[str, list[str]]] = []
+            for j in range(k + 2, len(lines)):
+                line = lines[j]
+                if j + 1 < len(lines) and lines[j + 1].strip() and set(lines[j + 1].strip()) == {"-"}:
+                    break  # the next section's title
+                if line.strip() and not line[0].isspace():
+                    entries.append((line.strip(), []))
+                elif line.strip() and entries:
+                    entries[-1][1].append(line.strip())
+            return entries
+    return None
+
+
+def _returns_value(func) -> bool:
+    """Whether ``func`` has a ``return`` with a value other than ``None`` outside nested functions (numpydoc's RT01
+    rule, :meth:`numpydoc.validate.Validator.method_returns_something`)."""
+    import ast
+    import textwrap
+
+    tree = ast.parse(textwrap.dedent(inspect.getsource(func))).body[0]
+
+    def walk(node):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.FunctionDef):
+                continue
+            if isinstance(child, ast.Return) and child.value is not None and not (
+                    isinstance(child.value, ast.Constant) and child.value.value is None):
+                yield child
+            yield from walk(child)
+    return any(True for _ in walk(tree))
+
+
+def missing_returns(func) -> str | None:
+    """What the docstring of ``func`` lacks (numpydoc RT01, RT03, YD01), or None: a ``Yields`` section for a
+    generator, else a ``Returns`` section when it returns a value, and a description under every entry."""
+    generator = inspect.isgeneratorfunction(func)
+    title = "Yields" if generator else "Returns"
+    entries = _section(func.__doc__, title)
+    if entries is None:
+        return f"no {title} section" if generator or _returns_value(func) else None
+    bare = [head for head, desc in entries if not desc]
+    return f"{title} entries without a description: {bare}" if bare or not entries else None
+
+
+def test_every_public_function_documents_what_it_returns():
+    """numpydoc RT01/RT03/YD01 over the functions and methods of the API pages, without building the docs."""
+    found = list(public_functions()) + list(public_methods())
+    assert any(n == "mmg_casadi.closed_loop.simulation.Trajectory.state" for n, _ in found)
+    bad = [f"{name}: {why}" for name, func in found if (why := missing_returns(func))]
+    assert not bad, "undocumented return values:\n" + "\n".join(bad)
+
+
+def test_returns_check_detects_a_missing_section():
+    def value(x):
+        """Double.
+
+        Parameters
+        ----------
+        x : float
+            A number.
+        """
+        def inner():
+            return 1
+        return 2 * x
+
+    def nothing(x):
+        """Print.
+
+        Parameters
+        ----------
+        x : float
+            A number.
+        """
+        if x:
+            return None
+        print(x)
+
+    def bare(x):
+        """Double.
+
+        Returns
+        -------
+        float
+
+        Examples
+        --------
+        >>> bare(1)
+        2
+        """
+        return 2 * x
+
+    def documented(x):
+        """Pairs.
+
+        Yields
+        ------
+        int
+            The numbers up to ``x``.
+        """
+        yield from range(x)
+
+    def generator(x):
+        """Pairs."""
+        yield x
+
+    assert missing_returns(value) == "no Returns section"
+    assert missing_returns(nothing) is None
+    assert missing_returns(bare) == "Returns entries without a description: ['float']"
+    assert missing_returns(documented) is None
+    assert missing_returns(generator) == "no Yields section"
+
+
 def cli_command_paths(parser=None, path=("mmg-casadi",)) -> list[tuple[str, ...]]:
     """Every command path of the ``mmg-casadi`` parser (``("mmg-casadi", "study", "statistics")``, ...)."""
     import argparse

@@ -37,14 +37,15 @@ def _leg(goal=(500.0, 0.0), heading=0.0, t_max=50.0, environment=None):
 
 # SHA-256 of the C source of these calm steps as generated without the environment wired in (CasADi 3.8.2; re-recorded
 # when the velocity obstacle's held heading became a state row, and again when the engine's propeller-speed row
-# (with its lag and limits), the per-leg propeller speeds and the wall-collision check entered the step;
+# (with its lag and limits), the per-leg propeller speeds and the wall-collision check entered the step, and when
+# each ship's own length entered its parameters (per-ship collision geometry);
 # `study all` and `study statistics --runs 200 --envs 1-5` gave the same outputs before and after): a calm layout
 # must keep exactly the calm-water closed loop (and so every paper number; tests/test_regression_runs.py checks
 # the outcomes).
 CALM_SOURCE_SHA256 = {
-    Layout(("none",)): "471261b7f3fcee2b257e5c4085f21195692f0ddb58b96152016776d9d18febe7",
+    Layout(("none",)): "8be222e13bb438ca48963e58e41c1b3546b09a74c493559b23528757f73e617c",
     Layout(("modified-vortex",) * 3, n_obstacles=1):
-        "72b35b0980cddac8aeb31bad6547554038e662d8ddc9832cfe4b9650a2502729",
+        "3e602ae500e9fe5986b73e74fd35fa51b106643343e18c3f866f5efa20b411f1",
 }
 
 

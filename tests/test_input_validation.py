@@ -128,6 +128,13 @@ def test_refused_scenario_leaves_no_directory_from_the_probe(tmp_path, capsys):
     (["traffic", "2000", "--t-max", "400"], "ships × t_max / dt: expected at most 2400000 ship-steps"),
     (["traffic", "0"], "ships: expected an integer in [1, 2000]"),
     (["traffic", "3", "--seed", "-1"], "--seed: expected an integer >= 0, got -1"),
+    # a Ray address nobody answers at: refused by a probe, not minutes later after the compile (issue 29)
+    (["study", "statistics", "--runs", "2", "--envs", "1", "--backend", "ray", "--address", "127.0.0.1:1"],
+     "--address: expected the host:port of a running Ray cluster (ray start --head; connecting to 127.0.0.1:1"),
+    (["study", "statistics", "--backend", "ray", "--address", "head"],
+     "--address: expected host:port, ray://host:port, auto or local, got 'head'"),
+    (["study", "statistics", "--backend", "ray", "--address", "ray://127.0.0.1:1"],
+     "--address: expected the host:port of a running Ray cluster"),
 ])
 def test_bad_input_is_refused_before_any_work_and_writes_nothing(tmp_path, capsys, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)

@@ -472,3 +472,81 @@ def test_simulate_accepts_a_traffic_situation(tmp_path):
     metrics = json.loads((out / "metrics.json").read_text())
     assert [s["name"] for s in metrics["ships"]] == ["OWN", "HEAD-ON", "CROSSING"]
     assert metrics["ships"][0]["reached_goal"] and not metrics["collision"]
+
+
+def test_a_tanker_sails_the_closest_hull_and_convert_says_which(tmp_path, capsys):
+    """A 300 m tanker gets the KVLCC2: her speed is a fraction of its 15.5 kn; her 12 kn come back unchanged; a
+    122 m general cargo ship stays a KCS (closest length) and a ship of no known length the default hull."""
+    tanker = _ship(58.7, 10.6, sog=12.0, cog=180.0, name="TANKER")
+    tanker["static"].update(shipType="Tanker", dimensions={"length": 300.0, "width": 50.0})
+    cargo = _ship(58.6, 10.7, sog=12.0, cog=270.0, name="CARGO")
+    cargo["static"].update(id=2, shipType="Cargo", dimensions={"length": 122.0})
+    bare = _ship(58.5, 10.6, sog=12.0, cog=0.0, name="BARE")
+    bare["static"]["id"] = 3
+    src = _situation(tanker, cargo, bare)
+    sc = traffic_situation_to_scenario(src)[0]
+    assert [s.vessel for s in sc.ships] == [None, "kvlcc2", None, None]
+    assert sc.ships[1].speed == pytest.approx(12.0 * KNOT / 7.9739, rel=1e-12)  # its data file's U_design (m/s)
+    assert sc.ships[2].speed == pytest.approx(12.0 * KNOT / 12.347, rel=1e-12)  # the KCS's
+    out = _round_trip(src, tmp_path)
+    printed = capsys.readouterr().out
+    assert "TANKER: 300 m, Tanker -> kvlcc2 (tanker hull, closest length (320 m))" in printed
+    assert "CARGO: 122 m, Cargo -> kcs (container hull, closest length (230 m))" in printed
+    for a, b in zip(_ships(src), _ships(out)):
+        assert b["initial"]["sog"] == pytest.approx(a["initial"]["sog"], rel=1e-12)
+    # the own-ship length scale keeps every ship a (Froude-scaled) KCS, and says so
+    src["ownShip"]["static"]["dimensions"] = {"length": 200.0}
+    sc = traffic_situation_to_scenario(src, length_scale="own-ship")[0]
+    assert all(s.vessel is None for s in sc.ships)
+
+
+# ------------------------------------------------------------------ each ship's own collision geometry
+
+def _abreast(gap: float, own: dict, target: dict, **settings) -> dict:
+    """Two ships sailing the same way side by side, ``gap`` L apart (centres), as a scenario dict."""
+    ships = [{"name": "own", "start": [0.0, 0.0], "heading": 0.0, "speed": 1.0, "waypoints": [[40.0, 0.0]], **own},
+             {"name": "target", "start": [0.0, gap], "heading": 0.0, "speed": 1.0, "waypoints": [[40.0, gap]],
+              **target}]
+    return {"settings": {"method": "none", "t_max": 3.0, **settings}, "ships": ships}
+
+
+def test_two_ships_of_the_unit_length_collide_at_exactly_the_collision_distance():
+    from mmg_casadi.vessel.library import load_vessel, pair_collision_distance, ship_size
+    kcs = load_vessel().ship
+    assert ship_size() == (1.0, 0.5 * kcs.B / kcs.L) and ship_size(length_m=kcs.L, beam_m=kcs.B) == ship_size()
+    assert pair_collision_distance(2.0, 1.0, 1.0) == 2.0  # the paper's 2 L, to the bit
+    assert pair_collision_distance(2.5, 1.0, 1.0) == 2.5
+    assert pair_collision_distance(2.0, 1.0, 122.0 / 230.0) == pytest.approx((230.0 + 122.0) / 230.0)
+
+
+@pytest.mark.parametrize("fleet", [False, True], ids=["unrolled", "fleet"])
+def test_a_122_m_target_beside_a_230_m_own_ship_collides_at_1_53_l_not_2_l(fleet):
+    from mmg_casadi.scenarios.run import run_scenario
+    from mmg_casadi.scenarios.scenario import scenario_from_dict
+    params = {"fleet_from_ships": 2} if fleet else None
+    sizes = ({"length_m": 230.0}, {"length_m": 122.0})
+    # 1.8 L apart: inside the 2 L of two KCS (a start the file check refuses), outside the pair's 1.53 L
+    with pytest.raises(ScenarioError, match=r"ships\[1\].start: expected a start at least collision_distance = 2 L"):
+        scenario_from_dict(_abreast(1.8, {}, {}))
+    res = run_scenario(scenario_from_dict(_abreast(1.8, *sizes)), params=params)
+    assert [s["collided"] for s in res.metrics["ships"]] == [False, False]
+    with pytest.raises(ScenarioError, match=r"at least 1.53043 L \(collision_distance = 2 L times the two ships'"):
+        scenario_from_dict(_abreast(1.5, *sizes))
+    sc = Scenario(Settings("none", t_max=3.0), [ShipSpec(**s) for s in (
+        {"name": "own", "start": [0, 0], "heading_deg": 0, "speed": 1, "waypoints": [[40, 0]], "length_m": 230.0},
+        {"name": "target", "start": [0, 1.5], "heading_deg": 0, "speed": 1, "waypoints": [[40, 1.5]],
+         "length_m": 122.0})])  # built directly: no start check, so the step decides
+    ships = run_scenario(sc, params=params).metrics["ships"]
+    assert [s["collided"] for s in ships] == [True, True] and ships[0]["collision_with"] == "target"
+
+
+def test_a_ship_touches_a_wall_at_half_its_own_beam():
+    from mmg_casadi.scenarios.run import run_scenario
+    from mmg_casadi.scenarios.scenario import scenario_from_dict
+    d = {"settings": {"method": "none", "t_max": 3.0},
+         "ships": [{"start": [0.0, 0.0], "heading": 0.0, "speed": 1.0, "waypoints": [[40.0, 0.0]]}],
+         "walls": [{"points": [[-5.0, 0.15], [45.0, 0.15]]}]}  # 0.15 L = 34.5 m from the centre line
+    assert run_scenario(scenario_from_dict(d)).metrics["ships"][0]["collided"] is False  # a KCS: 16.1 m
+    d["ships"][0]["beam_m"] = 80.0
+    ship = run_scenario(scenario_from_dict(d)).metrics["ships"][0]
+    assert ship["collided"] is True and ship["collision_kind"] == "wall"

@@ -32,6 +32,20 @@ def test_a_ship_sailing_into_land_grounds_with_time_and_place():
     assert own["collision_position"] == pytest.approx([20.0, 0.0], abs=0.05)
 
 
+def test_a_grounding_margin_grounds_the_ship_earlier_on_land_only():
+    # margin 2 L: the centre reaches 0.07 + 2 L from the shore at t = 17.93 L/U, so the step ending at 18.0 grounds
+    own = run_scenario(_into_land(), {"grounding_margin": 2.0}).metrics["ships"][0]
+    assert own["collision_kind"] == "land" and own["collision_time"] == pytest.approx(18.0)
+    assert own["collision_position"] == pytest.approx([18.0, 0.0], abs=0.05)
+    # a channel wall keeps the hull's side: the same shore as a wall is touched at t = 20.0 whatever the margin
+    sc = scenario_from_dict({
+        "settings": {"method": "none", "t_max": 60.0},
+        "ships": [{"name": "own", "start": [0, 0], "heading": 0, "speed": 1, "waypoints": [[50, 0]]}],
+        "walls": [{"points": [[20, -5], [20, 5]]}]})
+    wall = run_scenario(sc, {"grounding_margin": 2.0}).metrics["ships"][0]
+    assert wall["collision_time"] == pytest.approx(20.0)
+
+
 def test_grounding_is_the_run_failure_and_its_mechanism():
     (row,) = run_scenarios([_into_land()], time_guidance_calls=False)
     assert (row["success"], row["failure"], row["failure_pair"], row["failure_mechanism"]) == (

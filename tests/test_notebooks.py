@@ -8,7 +8,7 @@ import pytest
 from tuning.stagnation import distance_from_obstacle, stagnation_point
 
 NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
-NAMES = ("stagnation_points.ipynb", "pd_gain_design.ipynb", "apf_tuning.ipynb")
+NAMES = ("stagnation_points.ipynb", "pd_gain_design.ipynb", "apf_tuning.ipynb", "identify_from_trials.ipynb")
 
 
 def test_kernel_is_this_venv():

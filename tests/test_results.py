@@ -36,6 +36,7 @@ def _row(env: int, method: str, run: int, success: bool = True, **extra) -> dict
         "colregs_score": math.nan if run % 3 == 0 else 0.5 + run / 97,
         "colregs_compliant": None if run % 3 == 0 else run % 3 == run % 3 // 2,
         "colregs_verdicts": ";".join(f"{j + 1}:give-way:0.5:8={int(j < run % 3 // 2)}" for j in range(run % 3)),
+        "colregs_rule9": math.nan if run % 2 else 0.25 + run / 101,
     }
     row.update(extra)
     return row
@@ -262,7 +263,11 @@ def test_table_of_the_previous_version_is_refused(tmp_path):
     version_3 = (*RUN_COLUMNS[:RUN_COLUMNS.index("colregs_risky")], "colregs_compliant", "colregs_encounters",
                  "colregs_risky", "colregs_lawful", "colregs_score")
     path.write_text(",".join(version_3) + "\n")
-    with pytest.raises(InputError, match="older version, without the columns colregs_verdicts;"):
+    with pytest.raises(InputError, match="older version, without the columns colregs_verdicts, colregs_rule9;"):
+        ResultsTable(path).read()
+    version_4 = RUN_COLUMNS[:RUN_COLUMNS.index("colregs_rule9")]
+    path.write_text(",".join(version_4) + "\n")
+    with pytest.raises(InputError, match="older version, without the columns colregs_rule9;"):
         ResultsTable(path).read()
 
 

@@ -65,11 +65,11 @@ points = [[0.0, 5.0], [50.0, 55.0], [60, 55]]
 
 SCENARIO_DIR = files("mmg_casadi") / "data" / "scenarios"
 SHIPPED = ("head_on", "crossing", "overtaking", "static_obstacle", "conflict", "narrow_channel", "channel_crossing",
-           "narrow_channel_land", "strait_crossing", "fjord_island")
+           "narrow_channel_land", "strait_crossing", "fjord_island", "ais_replay")
 SHIPPED_METHOD = {"channel_crossing": "velocity-obstacle-speed", "strait_crossing": "colregs-vortex",
-                  "fjord_island": "colregs-vortex"}
+                  "fjord_island": "colregs-vortex", "ais_replay": "colregs-vortex"}
 """Shipped scenarios whose method is not the paper's modified vortex (the speed-action demonstration, the land
-scenarios written for colregs-vortex)."""
+scenarios written for colregs-vortex, the AIS replay)."""
 
 
 def _base() -> dict:

@@ -295,6 +295,60 @@ def test_signal_during_the_first_compile_leaves_no_compiler_and_no_build_folder(
     assert not list(cache.glob("*.so"))  # the compile was stopped, not finished
 
 
+@pytest.mark.parametrize("when,sig", [("loading", signal.SIGTERM), ("compiling", signal.SIGTERM),
+                                      ("loading", signal.SIGINT)], ids=["loading", "compiling", "loading-SIGINT"])
+def test_a_signal_while_a_fleet_scenario_starts_cold_prints_the_message(tmp_path, cli, monkeypatch, when, sig):
+    # SIGTERM while the package loads (the first seconds, before the CLI's handlers are in place: the process
+    # used to die at once with status 143 and no message; Ctrl-C gave an import traceback) or while the fleet
+    # step compiles (a 20-ship scenario runs the fleet step, as 300 ships do): one line, 128 + signal, no
+    # compiler, no build folder, no output
+    scenario = _fleet_scenario(tmp_path / "fleet.toml", 20)
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    monkeypatch.setenv("MMG_CASADI_CACHE", str(cache))
+    proc = cli(["simulate", str(scenario), "--out", str(tmp_path / "out")])
+    if when == "loading":
+        time.sleep(0.2)
+    else:
+        assert _wait_until(lambda: any(cache.glob(BUILD_PREFIX + "*")) or proc.poll() is not None, 120)
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(sig)
+    _o, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + sig, stderr
+    assert stderr.splitlines() == [f"mmg-casadi: interrupted by {signal.Signals(sig).name} (this command does not "
+                                   "resume: rerun it to start again)"]
+    assert _wait_until(lambda: not _processes_naming(str(cache)), 5.0), _processes_naming(str(cache))
+    assert not list(cache.iterdir()) and not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("before", [{}, {"metrics.json": "old", "trajectory.csv": "old", "notes.txt": "mine"}],
+                         ids=["new", "existing"])
+def test_sigterm_while_simulate_writes_leaves_no_partial_file(tmp_path, monkeypatch, capsys, before):
+    # a real SIGTERM arrives while the figure is being written (the trajectory files are written already): the
+    # output directory is as before (absent, or its old files whole) and no staging folder is left
+    import mmg_casadi.plotting
+    from mmg_casadi.cli import main
+
+    def figure(_res, path):
+        Path(path).write_bytes(b"half a figure")
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(10)  # the handler raises here
+
+    out = tmp_path / "out"
+    for name, text in before.items():
+        out.mkdir(exist_ok=True)
+        (out / name).write_text(text)
+    monkeypatch.setattr(mmg_casadi.plotting, "plot_scenario", figure)
+    scenario = Path(__file__).resolve().parents[1] / "mmg_casadi" / "data" / "scenarios" / "head_on.toml"
+    t0 = time.monotonic()
+    assert main(["simulate", str(scenario), "--set", "t_max=20", "--out", str(out)]) == 143
+    assert time.monotonic() - t0 < 60
+    assert capsys.readouterr().err.strip().splitlines()[-1].startswith("mmg-casadi: interrupted by SIGTERM")
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["out"] if before else [])
+    if before:
+        assert {p.name: p.read_text() for p in out.iterdir()} == before
+
+
 def test_a_cut_short_cached_library_is_rebuilt_not_loaded(tmp_path, monkeypatch):
     monkeypatch.setenv("MMG_CASADI_CACHE", str(tmp_path))
     x = ca.SX.sym("x")

@@ -55,7 +55,11 @@ def _states(layout: Layout, count: int, seed: int):
 LAYOUTS = [Layout((m,) * 6, n_obstacles=2) for m in AVOIDING] + [
     Layout(("modified-vortex", "velocity-obstacle", "none", "colregs-vortex"), n_obstacles=1),
     Layout(("modified-vortex",) * 3, n_walls=2),
+    Layout(("velocity-obstacle", "colregs-vortex", "velocity-obstacle-speed", "none"), n_obstacles=1, n_walls=2,
+           n_land=2),  # the land test of the velocity obstacles and colregs-vortex
     Layout(("velocity-obstacle",) * 4, n_obstacles=1, vo_cone="wide", vo_hold=False),
+    Layout(("colregs-vortex", "modified-vortex", "velocity-obstacle", "none"), n_obstacles=1,
+           vessels=("kcs", "kvlcc2", "kcs", "kvlcc2")),  # mixed hulls: a KVLCC2 in the KCS's units
 ]
 
 

@@ -190,3 +190,62 @@ def test_cli_bad_input_exits_2(tmp_path, argv, capsys):
     assert main(["tune", "pd", *argv, "--out", str(out)]) == 2
     assert not out.exists()
     assert argv[0] in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- another hull (--vessel)
+
+
+def test_kvlcc2_design_differs_from_kcs(design_1):
+    """The KVLCC2's own linearisation, Nomoto model and nonlinear steps: a stable design whose dominant pair has
+    the requested damping, on a Nomoto model unlike the KCS's (the tanker is course-unstable to port: K, T < 0)."""
+    d = design_pd(1.0, PdSpec(zeta=0.8), vessel="kvlcc2")
+    assert d.vessel == "kvlcc2" and d.model.vessel == "kvlcc2"
+    assert d.loop.stable and abs(d.loop.dominant_zeta - 0.8) <= 0.02 and not d.saturates
+    assert abs(d.nomoto_K - design_1.nomoto_K) > 1.0 and abs(d.nomoto_T - design_1.nomoto_T) > 1.0
+    assert (d.kp, d.kd) != pytest.approx((design_1.kp, design_1.kd), rel=0.05)
+    kcs_rpm = yaw_subsystem(1.0).n_rpm
+    assert yaw_subsystem(1.0, vessel="kvlcc2").n_rpm == pytest.approx(105.0, abs=0.5) != pytest.approx(kcs_rpm)
+    c = verify_nonlinear(d, square=False)
+    assert abs(c.step.overshoot - c.linear.overshoot) <= 3.0 and c.step.peak_rudder_deg <= 35.0 + 1e-9
+    fit = fit_nomoto_step(1.0, 0.1, vessel="kvlcc2")
+    assert fit.linear.K == pytest.approx(nomoto_first_order(yaw_subsystem(1.0, "starboard", vessel="kvlcc2")).K)
+    assert abs(fit.K_error) < 0.10 and abs(fit.T_error) < 0.10
+    assert paper_gains_map(1.0, kp_grid=[3.5], kd_grid=[4.0], vessel="kvlcc2").paper.vessel == "kvlcc2"
+
+
+@pytest.mark.parametrize("vessel", ["kvlcc9", "hull.toml"])
+def test_cli_tune_pd_bad_vessel(tmp_path, vessel, capsys):
+    out = tmp_path / "bad"
+    assert main(["tune", "pd", "--vessel", str(tmp_path / vessel) if vessel.endswith(".toml") else vessel,
+                 "--out", str(out)]) == 2
+    assert not out.exists()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--vessel" in err[0] and "kcs, kvlcc2" in err[0]
+
+
+def test_cli_tune_pd_vessel_file(tmp_path):
+    """A hull from a file: designed and stepped on its own model; the closed loop of the waypoint square (and so
+    the recommended gains) sails library hulls only, written as nulls."""
+    from mmg_casadi.vessel.library import data_path
+    hull = tmp_path / "tanker.toml"
+    hull.write_bytes(data_path("kvlcc2").read_bytes())
+    out = tmp_path / "pd"
+    assert main(["tune", "pd", "--vessel", str(hull), "--out", str(out)]) == 0
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["vessel"] == "tanker" and m["recommended"] is None
+    assert m["waypoint_square"] == {"design": None, "paper_gains": None}
+    d = design_pd(1.0, PdSpec(zeta=0.8), vessel="kvlcc2")
+    assert (m["kp"], m["kd"], m["nomoto_K"], m["nomoto_T"]) == (d.kp, d.kd, d.nomoto_K, d.nomoto_T)
+
+
+@pytest.mark.slow
+def test_cli_tune_pd_vessel_kvlcc2(tmp_path):
+    out = tmp_path / "pd"
+    assert main(["tune", "pd", "--vessel", "kvlcc2", "--out", str(out)]) == 0
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["vessel"] == "kvlcc2" and METRIC_KEYS <= set(m)
+    assert abs(m["dominant_zeta"] - 0.8) <= 0.02 and m["poles"] and all(p[0] < 0 for p in m["poles"])
+    kcs = design_pd(1.0, PdSpec(zeta=0.8))
+    assert abs(m["nomoto_K"] - kcs.nomoto_K) > 1.0 and abs(m["nomoto_T"] - kcs.nomoto_T) > 1.0
+    assert m["waypoint_square"]["design"]["status"] == "reached"
+    assert m["recommended"]["square"]["status"] == "reached"

@@ -93,7 +93,8 @@ def test_channel_crossing_only_slowing_avoids_the_ferry():
     own_t, own_s = turn["ships"][0], slow["ships"][0]
     assert turn["collision"] and own_t["collision_kind"] == "obstacle"
     assert own_t["collision_time"] == pytest.approx(21.25)
-    assert own_t["min_speed"] == pytest.approx(0.617, abs=1e-3)  # the hard turn's speed loss; rpm never changed
+    # the hard turn's speed loss; rpm never changed (0.617 before the velocity obstacle saw the bank, issue 24)
+    assert own_t["min_speed"] == pytest.approx(0.640, abs=1e-3)
     assert not slow["collision"] and own_s["reached_goal"]
     assert own_s["time_to_goal"] == pytest.approx(76.5)
     assert own_s["min_distance"] == pytest.approx(2.19, abs=5e-3)  # just outside the 2 L the cones keep

@@ -10,6 +10,7 @@ IMO MSC.137(76): standards for ship manoeuvrability (limits depend on L/V; L/V =
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import tomllib
 
@@ -217,3 +218,56 @@ def test_maneuver_command_sails_a_hull_and_refuses_a_bad_vessel_file_in_one_line
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["mmg-casadi: error: Yv: expected a finite number, got 'fast'"]
     assert not (tmp_path / "t").exists()
+
+
+@pytest.mark.parametrize("disturbed", [False, True])
+def test_a_hull_in_another_hulls_units_sails_the_same_metres_and_seconds(disturbed):
+    """A KVLCC2 sailed in the KCS's units (length and time) follows the trajectory it follows in its own units."""
+    import casadi as ca
+    from mmg_casadi.vessel.mmg import in_scene_units, rk4, scene_scales
+    kcs, vl = load_vessel("kcs"), load_vessel("kvlcc2")
+    f = build_mmg(vl.ship, vl.steering, disturbed=disturbed)
+    g = in_scene_units(f, vl.ship, kcs.ship)
+    lam, mu = scene_scales(vl.ship, kcs.ship)
+    tau = lam / mu
+    scale = ca.DM([mu, mu, 1 / tau, lam, lam, 1, 1])
+    x = ca.DM([1.0, 0, 0, 0, 0, 0, 0])
+    xs = scale * x
+    rpm = propeller_rpm_for_speed(1.0, vl.ship)
+    env = ([ca.DM([0.1, 1.0, 0.3, 2.0])], [ca.DM([0.1 * mu, 1.0, 0.3 * mu, 2.0])]) if disturbed else ([], [])
+    for _ in range(400):  # 35° rudder for 20 of its own time units (800 s)
+        x = rk4(f, x, (math.radians(35), rpm, *env[0]), 0.05)
+        xs = rk4(g, xs, (math.radians(35), rpm, *env[1]), 0.05 * tau)
+    assert abs(float(x[5])) > 1.5 * math.pi  # it turned through more than 270°
+    assert np.max(np.abs(np.array(scale * x - xs))) < 1e-12
+    # the same hull is its own unit: the model itself, unchanged
+    assert in_scene_units(f, vl.ship, vl.ship) is f
+
+
+def test_mixed_traffic_targets_take_the_hulls_in_turn_and_sail_at_their_own_speed(tmp_path, capsys):
+    """`study statistics --vessels kvlcc2,kcs`: agent1 a KVLCC2, agent2 a KCS, ...; a KVLCC2 at its design
+    speed sails 15.5/24 of the own KCS's speed in the scene's units; a bad list is refused in one line."""
+    from mmg_casadi.cli import main
+    from mmg_casadi.montecarlo.execution import layout_for
+    from mmg_casadi.scenarios.run import run_scenario
+    from mmg_casadi.scenarios.scenario import scenario_from_dict
+    lay = layout_for(2, "modified-vortex", {"target_vessels": "kvlcc2,kcs"})
+    assert lay.vessels == ("kcs", "kvlcc2", "kcs", "kvlcc2") and lay.unit_vessel() == "kcs"
+    sc = scenario_from_dict({"settings": {"method": "none", "t_max": 20.0}, "ships": [
+        {"name": "own", "start": [0, 0], "heading": 0, "speed": 1.0, "waypoints": [[60, 0]]},
+        {"name": "tanker", "start": [0, 20], "heading": 0, "speed": 1.0, "waypoints": [[60, 20]],
+         "vessel": "kvlcc2"}]})
+    tr = run_scenario(sc).trajectory
+    mu = load_vessel("kvlcc2").ship.U_design / load_vessel("kcs").ship.U_design
+    assert tr.state("u", 1)[-1] == pytest.approx(mu, rel=1e-3)  # steady at its design rpm
+    assert tr.state("u", 0)[-1] == pytest.approx(1.0, rel=1e-3)
+    out = tmp_path / "mixed"
+    assert main(["study", "statistics", "--runs", "2", "--envs", "1", "--methods", "modified-vortex",
+                 "--vessels", "kvlcc2,kcs", "--workers", "1", "--out", str(out)]) == 0
+    assert json.loads((out / "study.json").read_text())["params"]["target_vessels"] == "kvlcc2,kcs"
+    capsys.readouterr()
+    assert main(["study", "statistics", "--runs", "2", "--envs", "1", "--vessels", "kcs,tug",
+                 "--out", str(tmp_path / "bad")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "error: --vessels: expected one of: own, kcs, kvlcc2, kcs,kvlcc2" in err[0]
+    assert not (tmp_path / "bad").exists()

@@ -23,7 +23,13 @@ HOLDOUT_SEED = 2000
 
 def paper_encounters() -> dict:
     """The paper's encounters used for training (:func:`mmg_casadi.scenarios.encounters.paper_encounters`), all with the
-    modified sink-vortex."""
+    modified sink-vortex.
+
+    Returns
+    -------
+    dict of Scenario
+        Name to scenario: ``static-obstacle``, ``overtaking``, ``head-on``, ``crossing``, ``conflict``.
+    """
     return {k: with_method(v, METHOD) for k, v in encounters.paper_encounters().items()}
 
 
@@ -38,6 +44,11 @@ def sampled_scenario(env: int, run: int, base_seed: int):
         Run index within the environment.
     base_seed : int
         Base seed of the draw (e.g. :data:`TRAIN_SEED` or :data:`HOLDOUT_SEED`).
+
+    Returns
+    -------
+    Scenario
+        The validated scenario, its source ``env<env>-run<run>-seed<base_seed>``.
     """
     return scenario_from_dict(sample_scenario(env, run, base_seed).to_scenario_dict(METHOD),
                               source=f"env{env}-run{run}-seed{base_seed}")
@@ -57,6 +68,11 @@ def training_scenarios(n_sampled: int, *, paper: bool = True, envs=(1, 2), base_
         Environments the sampled scenarios are drawn from, in turn.
     base_seed : int
         Base seed of the sampled scenarios.
+
+    Returns
+    -------
+    dict of Scenario
+        Name to scenario: the paper's encounters first (if ``paper``), then ``env<e>-run<r>`` for the sampled ones.
     """
     if isinstance(n_sampled, bool) or not isinstance(n_sampled, int) or n_sampled < 0:
         raise InputError("train", "an integer >= 0", n_sampled)

@@ -229,6 +229,12 @@ def prepare_case(name: str, sc, config: TuningConfig = TuningConfig()) -> Traini
         The scenario (modified sink-vortex guidance).
     config : TuningConfig
         Settings of the smoothed training problem.
+
+    Returns
+    -------
+    TrainingCase
+        Smooth layout, initial state, numeric parameters, horizon and the exact rollout's end time and closest
+        approach.
     """
     pr = build_problem(sc, dict(zip(THETA, PAPER)))
     layout, x0, p = pr.layout, pr.x0, pr.p
@@ -259,6 +265,17 @@ def case_terms(case: TrainingCase, theta, config: TuningConfig = TuningConfig(),
         Settings of the smoothed training problem.
     step : casadi.Function, optional
         Closed-loop step of ``case.layout``; built if None.
+
+    Returns
+    -------
+    J : casadi.MX
+        CE + w MCTE summed over the ships (smoothed).
+    softmin : casadi.MX
+        Soft minimum of the pair and ship–obstacle distances while sailing (L).
+    ce : casadi.MX (1, N)
+        Smoothed CE per ship.
+    mcte : casadi.MX (1, N)
+        Smoothed MCTE per ship (L).
     """
     step = step or build_closed_loop_step(case.layout)
     n = case.steps
@@ -357,6 +374,11 @@ class SmoothProblem:
         ----------
         theta : array_like
             θ = (k_vor0, lam_sink, r_safe).
+
+        Returns
+        -------
+        list of dict
+            One per case: ``name``, ``ce`` and ``mcte`` (lists, one per ship; MCTE in L), ``softmin_distance`` (L).
         """
         ce, mc = (np.array(v).ravel() for v in self.terms_function(np.asarray(theta, float)))
         g = self.constraints(theta)
@@ -382,6 +404,12 @@ def gradient_check(problem: SmoothProblem, theta=PAPER, rel_step: float = 1e-6) 
         θ = (k_vor0, lam_sink, r_safe) at which to compare; the paper's values by default.
     rel_step : float
         Relative finite-difference step (of ``max(|θ_k|, 1)``).
+
+    Returns
+    -------
+    dict
+        ``theta``, ``names``, ``ad`` and ``fd`` (the gradients), ``rel_step``, ``rel_error`` (per component),
+        ``rel_error_norm``, ``ad_time_s`` (s) and ``scale_invariance`` (``g_0 θ_0 + g_1 θ_1``).
     """
     theta = np.asarray(theta, float)
     t0 = time.perf_counter()
@@ -539,6 +567,11 @@ def prepare_cases(scenarios: dict, config: TuningConfig = TuningConfig(), report
         Settings of the smoothed training problem.
     report : callable, optional
         Takes one progress line per case; None for silence.
+
+    Returns
+    -------
+    list of TrainingCase
+        One per scenario, in the order of ``scenarios``.
     """
     out = []
     for name, sc in scenarios.items():
@@ -568,6 +601,12 @@ def tune(scenarios, config: TuningConfig = TuningConfig(), *, theta0=PAPER, repo
         Takes one progress line; None for silence.
     check_gradient : bool
         Whether to compare the AD gradient with finite differences at ``theta0`` first.
+
+    Returns
+    -------
+    TuningResult
+        θ and objective before and after, constraints, IPOPT iterates and status, gradient check, timings and the
+        per-case terms.
     """
     timings = {}
     t0 = time.perf_counter()
@@ -687,6 +726,12 @@ def evaluate(param_sets: dict, *, envs=(1, 2, 3, 4, 5), runs: int = 40, base_see
         Base seed of the held-out scenarios.
     report : callable, optional
         Takes one progress line; None for silence.
+
+    Returns
+    -------
+    dict
+        ``{env: {name: summary}}``, each summary with ``runs``, ``successes``, ``success_rate``, ``success_ci``,
+        ``failures`` (count by kind), ``ce_mean`` and ``mcte_mean`` (L).
     """
     if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
         raise InputError("holdout", "an integer >= 1", runs)
@@ -745,6 +790,12 @@ def exact_training(scenarios: dict, params: dict, w_mcte: float = TuningConfig.w
         Guidance parameters (θ as ``{name: value}``) for every scenario.
     w_mcte : float
         Weight of MCTE against CE in the objective.
+
+    Returns
+    -------
+    dict
+        ``total`` (sum of the objectives) and ``scenarios``: per name ``objective``, ``collision``,
+        ``min_distance`` (L), ``reached`` (ships at their goal) and ``ships``.
     """
     out, total = {}, 0.0
     for name, sc in scenarios.items():

@@ -63,6 +63,11 @@ def training_set(train: int) -> dict:
     ----------
     train : int
         Sampled scenarios (≥ 0).
+
+    Returns
+    -------
+    dict of Scenario
+        Name to scenario (:func:`tuning.apf.training_scenarios`).
     """
     return apf.training_scenarios(train, envs=TRAIN_ENVS)
 
@@ -112,6 +117,11 @@ def heldout(out, sets: dict, *, runs: int, envs, base_seed: int, workers=None) -
         Seed of the held-out scenarios.
     workers : int, optional
         Local worker processes.
+
+    Returns
+    -------
+    dict
+        Set name to its outcomes: environment to ``{"run", "success", "ce", "mcte", "failure"}`` arrays.
     """
     res = {}
     for name, params in sets.items():
@@ -191,6 +201,12 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
         Environments where the tuned set must be significantly better to be called an improvement.
     workers : int, optional
         Worker processes of the held-out study.
+
+    Returns
+    -------
+    dict
+        The report written to ``report.json``: parameters (base, paper, tuned), training set, held-out study,
+        configuration, gradient check, search, judgement, timings (s) and the files written.
 
     Notes
     -----

@@ -9,6 +9,12 @@ the paper's gains); the *recommended* gains (``recommended`` in ``metrics.json``
 meet a specification that includes tracking: square CE and MCTE no worse than the paper's gains, then the
 best damping (smallest 10° step overshoot) on a (K_p, K_d) grid. ``recommended.better_damped`` says where the
 paper's gains sit: how many grid gains track as well and are better damped.
+
+``--vessel`` designs for another hull (a name of ``mmg-casadi vessels`` or a vessel .toml file; the KCS by
+default): its linearisation, Nomoto fits, nonlinear steps and waypoint square, the speed a fraction of its design
+speed and times in its L/U_des; ``metrics.json`` then names it (``vessel``). The paper's gains are analysed on it
+as they are. The waypoint square runs in the closed loop, which sails the library's hulls only: for a hull from a
+file ``waypoint_square`` holds nulls and ``recommended`` is null.
 """
 
 from __future__ import annotations
@@ -18,6 +24,7 @@ from pathlib import Path
 
 from mmg_casadi.io import write_json
 from mmg_casadi.errors import InputError, check_range
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, VESSELS, load_vessel
 
 from .linear import fit_nomoto_step
 from .pd.design import PdSpec, analyse_gains, design_pd
@@ -49,7 +56,7 @@ def _finite(obj):
 
 
 def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None = None,
-        tracking_tolerance: float = 0.0) -> dict:
+        tracking_tolerance: float = 0.0, vessel: str = DEFAULT_VESSEL) -> dict:
     """Design, verify and plot; return (and write to ``out/metrics.json``) the metrics.
 
     Non-finite numbers are written as null.
@@ -59,7 +66,7 @@ def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None 
     out : str or Path
         Output directory.
     speed : float
-        Speed of the design (fraction of the design speed).
+        Speed of the design (fraction of the hull's design speed).
     zeta : float, optional
         Damping ratio (default 0.8).
     wn : float, optional
@@ -67,15 +74,29 @@ def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None 
     tracking_tolerance : float
         Relative excess of the square's CE and MCTE over the paper gains' that the recommended gains may have
         (0: at least as good; see :mod:`tuning.pd_tracking`).
+    vessel : str or pathlib.Path
+        The hull: a name of :data:`~mmg_casadi.vessel.library.VESSELS` or a vessel .toml file (default the KCS).
+
+    Returns
+    -------
+    dict
+        The metrics written to ``metrics.json``: the design's gains, ζ, ω_n, Nomoto model and fits, poles, margins,
+        overshoots (%), settling times (L/U_des), the paper gains' analysis, the waypoint square and the gains
+        recommended for tracking, and ``vessel`` (the hull's name) for another hull than the KCS; non-finite
+        numbers as None.
     """
     speed, zeta, wn, out = _validate(out, speed, zeta, wn)
     tracking_tolerance = check_range("tracking_tolerance", tracking_tolerance, 0.0, 1.0, cls=InputError)
-    design = design_pd(speed, PdSpec(zeta=zeta, wn=wn))
-    gmap = paper_gains_map(speed)
+    hull = load_vessel(vessel)
+    vessel = str(vessel)
+    design = design_pd(speed, PdSpec(zeta=zeta, wn=wn), vessel=vessel)
+    gmap = paper_gains_map(speed, vessel=vessel)
     paper = gmap.paper
-    check = verify_nonlinear(design)
-    check_paper = verify_nonlinear(paper)
-    fits = {"starboard": fit_nomoto_step(speed, 0.1), "port": fit_nomoto_step(speed, -0.01)}
+    square = vessel in VESSELS  # the closed loop sails library hulls only
+    check = verify_nonlinear(design, square=square)
+    check_paper = verify_nonlinear(paper, square=square)
+    fits = {"starboard": fit_nomoto_step(speed, 0.1, vessel=vessel),
+            "port": fit_nomoto_step(speed, -0.01, vessel=vessel)}
 
     out.mkdir(parents=True, exist_ok=True)
     plot_root_locus(design, out / "root_locus.png", paper=paper)
@@ -85,6 +106,7 @@ def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None 
 
     d = design.to_dict()
     metrics = {
+        **({} if vessel == DEFAULT_VESSEL else {"vessel": hull.name}),
         "speed": speed,
         "side": design.side,
         "kp": design.kp,
@@ -129,21 +151,29 @@ def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None 
         },
         "waypoint_square": {"design": check.square, "paper_gains": check_paper.square},
     }
-    track = design_for_tracking(speed, tolerance=tracking_tolerance)
-    rec = verify_nonlinear(analyse_gains(track.kp, track.kd, speed), square=False)
-    metrics["recommended"] = {**track.to_dict(), "overshoot_nonlinear": rec.step.overshoot,
-                              "overshoot_nonlinear_opposite": rec.opposite.overshoot,
-                              "specification": f"waypoint-square CE and MCTE <= (1 + {tracking_tolerance:g}) x "
-                                               "the paper gains', then the smallest linear 10-degree step "
-                                               "overshoot (tuning/pd_tracking.py)"}
+    track = design_for_tracking(speed, tolerance=tracking_tolerance, vessel=vessel) if square else None
+    metrics["recommended"] = None
+    if track is not None:
+        rec = verify_nonlinear(analyse_gains(track.kp, track.kd, speed, vessel=vessel), square=False)
+        metrics["recommended"] = {**track.to_dict(), "overshoot_nonlinear": rec.step.overshoot,
+                                  "overshoot_nonlinear_opposite": rec.opposite.overshoot,
+                                  "specification": f"waypoint-square CE and MCTE <= (1 + {tracking_tolerance:g}) x "
+                                                   "the paper gains', then the smallest linear 10-degree step "
+                                                   "overshoot (tuning/pd_tracking.py)"}
     metrics = _finite(metrics)
     write_json(out / "metrics.json", metrics)
-    print(f"PD design at speed {speed:g} ({design.method}, zeta {design.zeta:g}, wn {design.wn:.4g} "
+    of = "" if vessel == DEFAULT_VESSEL else f" of the {hull.name}"
+    print(f"PD design at speed {speed:g}{of} ({design.method}, zeta {design.zeta:g}, wn {design.wn:.4g} "
           f"from {design.wn_source}): kp = {design.kp:.4g}, kd = {design.kd:.4g}")
     print(f"  Nomoto K = {design.nomoto_K:.4g}, T = {design.nomoto_T:.4g} (design-speed units, {design.side} side); "
           f"overshoot linear {design.overshoot:.2f} %, nonlinear {check.step.overshoot:.2f} %")
     print(f"  paper gains kp = {paper.kp:g}, kd = {paper.kd:g}: dominant zeta {paper.loop.dominant_zeta:.3f}, "
           f"overshoot linear {paper.overshoot:.2f} %, nonlinear {check_paper.step.overshoot:.2f} %")
+    if track is None:
+        print(f"  waypoint square and recommended gains: not run (the closed loop sails the library's hulls only: "
+              f"{', '.join(VESSELS)})")
+        print(f"  -> {out}")
+        return metrics
     sq, sqp = check.square, check_paper.square
     print(f"  waypoint square: design CE {sq['ce']:.4f} MCTE {sq['mcte']:.4f} ({sq['status']}); "
           f"paper gains CE {sqp['ce']:.4f} MCTE {sqp['mcte']:.4f} ({sqp['status']})")

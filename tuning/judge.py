@@ -45,6 +45,12 @@ def paired_mean(a, b) -> dict:
     a, b : sequence of float
         Paired values (``nan`` where a run has none).
 
+    Returns
+    -------
+    dict
+        ``n`` (pairs), ``mean`` of ``a − b``, ``ci`` (``[low, high]``, ``inf`` half-width for one pair; ``nan``
+        without any), ``mean_a`` and ``mean_b``.
+
     Examples
     --------
     >>> d = paired_mean([1.0, 2.0, 3.0, float("nan")], [1.0, 1.0, 1.0, 2.0])
@@ -71,6 +77,13 @@ def compare_env(cand: dict, base: dict, alpha: float = 0.05) -> dict:
         ``{"success": bool array, "ce": float array, "mcte": float array}`` over the same runs, in the same order.
     alpha : float
         Significance level.
+
+    Returns
+    -------
+    dict
+        ``runs``, ``success`` (:meth:`~mmg_casadi.montecarlo.stats.PairedComparison.to_dict`), ``verdict``,
+        ``success_candidate``, ``success_baseline`` with their Wilson intervals, and ``ce``, ``mcte``
+        (:func:`paired_mean` over the joint successes).
     """
     s_a = np.asarray(cand["success"], bool)
     s_b = np.asarray(base["success"], bool)
@@ -140,6 +153,11 @@ def outcomes_from_rows(rows, method: str) -> dict:
         Rows of :class:`mmg_casadi.montecarlo.results.ResultsTable`.
     method : str
         The method whose rows are used.
+
+    Returns
+    -------
+    dict
+        Environment to ``{"run", "success", "ce", "mcte"}`` arrays and a ``failure`` list, in run order.
     """
     out: dict = {}
     for r in rows:

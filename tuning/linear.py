@@ -19,7 +19,12 @@ The rudder's flow-straightening coefficient switches at β_P = 0 (γ_R⁺ for β
 ``side="mean"``
     the average of the two.
 
-On this KCS the two differ strongly at the design speed (first-order Nomoto K' = 35, T' = 60 to port, nearly
+Every function takes the hull as ``vessel`` (a name of :data:`~mmg_casadi.vessel.library.VESSELS` or a vessel
+.toml file, :func:`~mmg_casadi.vessel.library.load_vessel`; the KCS by default): its ship and steering
+parameters are linearised and simulated, the speed is a fraction of *its* design speed and times are in *its*
+L/U_des.
+
+On the KCS the two differ strongly at the design speed (first-order Nomoto K' = 35, T' = 60 to port, nearly
 course-unstable, against K' = 4.1, T' = 6.8 to starboard) and little at half speed. A small nonlinear rudder
 step reproduces the side its sign selects (:func:`fit_nomoto_step`).
 
@@ -38,8 +43,8 @@ import numpy as np
 from scipy.optimize import curve_fit
 
 from mmg_casadi.errors import ParameterError, check_range
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel
 from mmg_casadi.vessel.mmg import STATE_NAMES, build_cvodes, build_mmg, linearise, propeller_rpm_for_speed
-from mmg_casadi.vessel.ship import load_kcs, load_steering
 
 YAW_STATES = ("v", "r", "psi", "delta")
 SIDES = ("port", "starboard", "mean")
@@ -76,6 +81,9 @@ class YawModel:
     surge_coupling : float
         Largest magnitude of the Jacobian entries that couple surge (``u``, ``n_rpm``) with the yaw states; exactly
         0.0 for ``side="port"`` (the Jacobian at straight running), of order 1e-10 for the others.
+    vessel : str
+        The hull linearised: a name of :data:`~mmg_casadi.vessel.library.VESSELS` or a vessel .toml file
+        (``speed``, the matrices and their units are that hull's).
     """
 
     speed: float
@@ -85,15 +93,27 @@ class YawModel:
     B: np.ndarray = field(repr=False)
     C: np.ndarray = field(repr=False)
     surge_coupling: float = 0.0
+    vessel: str = DEFAULT_VESSEL
 
     def ss(self) -> ct.StateSpace:
-        """``control.ss`` of the subsystem (input ``delta_c``, outputs ``r``, ``psi``)."""
+        """``control.ss`` of the subsystem (input ``delta_c``, outputs ``r``, ``psi``).
+
+        Returns
+        -------
+        control.StateSpace
+            The subsystem (states v, r, psi, delta; design-speed units).
+        """
         return ct.ss(self.A, self.B, self.C, np.zeros((2, 1)), inputs=["delta_c"], outputs=["r", "psi"],
                      states=list(YAW_STATES), name=f"yaw_{self.side}_{self.speed:g}")
 
     def tf_yaw_rate(self) -> ct.TransferFunction:
         """Transfer function δ_c → r (steering gear included), from the (v, r, delta) states (ψ does not feed
         back).
+
+        Returns
+        -------
+        control.TransferFunction
+            r/δ_c (yaw rate in U_des/L per rad; time in L/U_des).
 
         Examples
         --------
@@ -104,13 +124,19 @@ class YawModel:
         return _siso_tf(self.A[np.ix_(k, k)], self.B[k], np.array([0.0, 1.0, 0.0]), "r")
 
     def tf_heading(self) -> ct.TransferFunction:
-        """Transfer function δ_c → ψ (steering gear included)."""
+        """Transfer function δ_c → ψ (steering gear included).
+
+        Returns
+        -------
+        control.TransferFunction
+            ψ/δ_c (rad per rad; time in L/U_des).
+        """
         return _siso_tf(self.A, self.B, self.C[1], "psi")
 
     def to_dict(self) -> dict:
         return {"speed": self.speed, "n_rpm": self.n_rpm, "side": self.side, "states": list(YAW_STATES),
                 "A": self.A.tolist(), "B": self.B.tolist(), "C": self.C.tolist(),
-                "surge_coupling": self.surge_coupling}
+                "surge_coupling": self.surge_coupling, "vessel": self.vessel}
 
 
 def _siso_tf(A, B, c, output: str) -> ct.TransferFunction:
@@ -121,23 +147,30 @@ def _siso_tf(A, B, c, output: str) -> ct.TransferFunction:
     return ct.tf(num, den, inputs="delta_c", outputs=output)
 
 
-def _jacobians(speed: float, n_rpm: float, v: float):
-    A, B = linearise([speed, v, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, n_rpm])
+def _jacobians(speed: float, n_rpm: float, v: float, hull):
+    A, B = linearise([speed, v, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, n_rpm], hull.ship, hull.steering)
     yaw = np.asarray(_IDX)
     coupling = np.concatenate([A[_U, yaw], A[yaw, _U], B[yaw, 1]])
     return A[np.ix_(yaw, yaw)], B[yaw, :1], float(np.max(np.abs(coupling)))
 
 
-def yaw_subsystem(speed: float = 1.0, side: str = "port") -> YawModel:
+def yaw_subsystem(speed: float = 1.0, side: str = "port", *, vessel: str = DEFAULT_VESSEL) -> YawModel:
     """Linear yaw subsystem about straight running at ``speed`` × U_des (exact CasADi Jacobians).
 
     Parameters
     ----------
     speed : float
-        Fraction of the design speed, in [0.2, 1.2].
+        Fraction of the hull's design speed, in [0.2, 1.2].
     side : {"port", "starboard", "mean"}
         Branch of the flow-straightening switch (module docstring); ``"port"`` is the Jacobian exactly at
         straight running.
+    vessel : str or pathlib.Path
+        The hull: a name of :data:`~mmg_casadi.vessel.library.VESSELS` or a vessel .toml file (default the KCS).
+
+    Returns
+    -------
+    YawModel
+        Operating point, side and the matrices A (4x4), B (4x1), C (2x4) in design-speed units.
 
     Examples
     --------
@@ -146,21 +179,24 @@ def yaw_subsystem(speed: float = 1.0, side: str = "port") -> YawModel:
     ((4, 4), (4, 1), 0.0)
     >>> round(float(m.B[3, 0]), 6)          # steering gear: δ̇ = (δ_c - δ)/T_δ with T_δ = 1
     1.0
+    >>> yaw_subsystem(1.0, vessel="kvlcc2").vessel
+    'kvlcc2'
     """
     speed = _check_speed(speed)
     _check_side(side)
-    n = propeller_rpm_for_speed(speed)
-    port = _jacobians(speed, n, 0.0)
+    hull = load_vessel(vessel)
+    n = propeller_rpm_for_speed(speed, hull.ship)
+    port = _jacobians(speed, n, 0.0, hull)
     if side == "port":
         A, B, c = port
     else:
-        star = _jacobians(speed, n, -speed * math.tan(EPS_BETA))
+        star = _jacobians(speed, n, -speed * math.tan(EPS_BETA), hull)
         if side == "starboard":
             A, B, c = star
         else:
             A, B, c = (port[0] + star[0]) / 2, (port[1] + star[1]) / 2, max(port[2], star[2])
     C = np.array([[0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
-    return YawModel(speed, n, side, A, B, C, c)
+    return YawModel(speed, n, side, A, B, C, c, str(vessel))
 
 
 class _OwnSpeedUnits:
@@ -200,6 +236,8 @@ class Nomoto(_OwnSpeedUnits):
         Speed of the operating point, fraction of the design speed.
     side : str
         Linearised side of the γ_R switch (``"port"``, ``"starboard"`` or ``"mean"``).
+    vessel : str
+        The hull of the model (a name of :data:`~mmg_casadi.vessel.library.VESSELS` or a vessel .toml file).
     """
 
     K: float
@@ -209,16 +247,22 @@ class Nomoto(_OwnSpeedUnits):
     T3: float
     speed: float
     side: str
+    vessel: str = DEFAULT_VESSEL
 
     def T_seconds(self, ship=None) -> float:
         """Time constant in seconds at full scale.
 
         Parameters
         ----------
-        ship : Ship, optional
-            Ship whose ``time_scale_s`` (seconds per L/U_des) converts the time; the KCS by default.
+        ship : ShipParams, optional
+            Ship whose ``time_scale_s`` (seconds per L/U_des) converts the time; the model's hull by default.
+
+        Returns
+        -------
+        float
+            ``T`` (s).
         """
-        return self.T * (ship or load_kcs()).time_scale_s
+        return self.T * (ship or load_vessel(self.vessel).ship).time_scale_s
 
     def to_dict(self) -> dict:
         return {"K": self.K, "T": self.T, "T1": self.T1, "T2": self.T2, "T3": self.T3, "speed": self.speed,
@@ -241,6 +285,11 @@ def nomoto_second_order(yaw_model: YawModel) -> Nomoto:
     yaw_model : YawModel
         Linear yaw subsystem (:func:`yaw_subsystem`); its (v, r) part with the rudder angle as input is used.
 
+    Returns
+    -------
+    Nomoto
+        ``K``, ``T1``, ``T2``, ``T3`` and the equivalent ``T`` (L/U_des).
+
     Examples
     --------
     >>> n = nomoto_second_order(yaw_subsystem(0.5))
@@ -254,7 +303,8 @@ def nomoto_second_order(yaw_model: YawModel) -> Nomoto:
     K = float(-(np.linalg.solve(A2, b2))[1, 0])
     T1, T2 = sorted(np.real(-1.0 / poles), reverse=True)
     T3 = float(-1.0 / zero)
-    return Nomoto(K, float(T1 + T2 - T3), float(T1), float(T2), T3, yaw_model.speed, yaw_model.side)
+    return Nomoto(K, float(T1 + T2 - T3), float(T1), float(T2), T3, yaw_model.speed, yaw_model.side,
+                  yaw_model.vessel)
 
 
 def nomoto_first_order(yaw_model: YawModel) -> Nomoto:
@@ -265,6 +315,11 @@ def nomoto_first_order(yaw_model: YawModel) -> Nomoto:
     yaw_model : YawModel
         Linear yaw subsystem (:func:`yaw_subsystem`); reduced through :func:`nomoto_second_order`.
 
+    Returns
+    -------
+    Nomoto
+        ``K`` and ``T`` (L/U_des), ``T1 = T``, ``T2 = T3 = 0``.
+
     Examples
     --------
     >>> n = nomoto_first_order(yaw_subsystem(1.0, "starboard"))
@@ -272,7 +327,7 @@ def nomoto_first_order(yaw_model: YawModel) -> Nomoto:
     (4.09, 6.84)
     """
     n2 = nomoto_second_order(yaw_model)
-    return Nomoto(n2.K, n2.T, n2.T, 0.0, 0.0, n2.speed, n2.side)
+    return Nomoto(n2.K, n2.T, n2.T, 0.0, 0.0, n2.speed, n2.side, n2.vessel)
 
 
 @dataclass(frozen=True)
@@ -330,7 +385,8 @@ class NomotoFit(_OwnSpeedUnits):
                 "K_error": self.K_error, "T_error": self.T_error}
 
 
-def fit_nomoto_step(speed: float = 1.0, rudder_deg: float = 0.1, n_points: int = 2001) -> NomotoFit:
+def fit_nomoto_step(speed: float = 1.0, rudder_deg: float = 0.1, n_points: int = 2001, *,
+                    vessel: str = DEFAULT_VESSEL) -> NomotoFit:
     """Fit ``r(t) = K δ (1 - exp(-t/T))`` to a rudder step on the NONLINEAR model (CVODES, tight tolerances).
 
     The step starts from straight running with the rudder already at ``rudder_deg`` and the command equal to it,
@@ -346,11 +402,18 @@ def fit_nomoto_step(speed: float = 1.0, rudder_deg: float = 0.1, n_points: int =
     Parameters
     ----------
     speed : float
-        Fraction of the design speed, in [0.2, 1.2].
+        Fraction of the hull's design speed, in [0.2, 1.2].
     rudder_deg : float
         Rudder step in degrees, nonzero with magnitude at most 35; its sign selects the side (positive starboard).
     n_points : int
         Number of sample times over the horizon used for the fit.
+    vessel : str or pathlib.Path
+        The hull: a name of :data:`~mmg_casadi.vessel.library.VESSELS` or a vessel .toml file (default the KCS).
+
+    Returns
+    -------
+    NomotoFit
+        Fitted ``K`` and ``T``, the fit's RMS residual, the linear model of the same side and the simulated history.
 
     Examples
     --------
@@ -361,11 +424,12 @@ def fit_nomoto_step(speed: float = 1.0, rudder_deg: float = 0.1, n_points: int =
     speed = _check_speed(speed)
     check_range("rudder_deg", abs(rudder_deg), 0.0, 35.0, low_open=True, unit="degrees (sign = side)")
     side = "starboard" if rudder_deg > 0 else "port"
-    lin = nomoto_first_order(yaw_subsystem(speed, side))
+    hull = load_vessel(vessel)
+    lin = nomoto_first_order(yaw_subsystem(speed, side, vessel=vessel))
     t = np.linspace(0.0, max(20.0, 10.0 * lin.T), n_points)
-    n = propeller_rpm_for_speed(speed)
+    n = propeller_rpm_for_speed(speed, hull.ship)
     d = math.radians(rudder_deg)
-    F = build_cvodes(build_mmg(load_kcs(), load_steering()), t[1:])
+    F = build_cvodes(build_mmg(hull.ship, hull.steering), t[1:])
     X = np.array(F(x0=[speed, 0, 0, 0, 0, 0, d], p=[d, n])["xf"])
     r = np.concatenate([[0.0], X[STATE_NAMES.index("r")]])
 

@@ -37,6 +37,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from mmg_casadi.errors import InputError, check_range
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL
 
 from .pd.design import PAPER_GAINS, analyse_gains
 from .pd.verification import waypoint_square
@@ -92,34 +93,50 @@ class TrackingDesign:
     pareto: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
-        """The fields as a plain dict."""
+        """The fields as a plain dict.
+
+        Returns
+        -------
+        dict
+            The dataclass fields by name (``dataclasses.asdict``).
+        """
         return asdict(self)
 
 
-def _evaluate(kp: float, kd: float, speed: float) -> dict:
-    a = analyse_gains(kp, kd, speed)
-    sq = waypoint_square(kp, kd)
+def _evaluate(kp: float, kd: float, speed: float, vessel: str) -> dict:
+    a = analyse_gains(kp, kd, speed, vessel=vessel)
+    sq = waypoint_square(kp, kd, vessel=vessel)
     return {"kp": float(kp), "kd": float(kd), "overshoot": float(a.overshoot), "stable": bool(a.loop.stable),
             "dominant_zeta": float(a.loop.dominant_zeta), "square": sq}
 
 
 def design_for_tracking(speed: float = 1.0, *, reference=PAPER_GAINS, kp_grid=KP_GRID, kd_grid=KD_GRID,
-                        tolerance: float = 0.0) -> TrackingDesign:
+                        tolerance: float = 0.0, vessel: str = DEFAULT_VESSEL) -> TrackingDesign:
     """Best-damped gains of the grid that track the waypoint square as well as ``reference`` (module docstring).
 
     Parameters
     ----------
     speed : float
-        Speed of the linear analysis (the square always runs at the design speed).
+        Speed of the linear analysis, fraction of the hull's design speed (the square always runs at the design
+        speed).
     reference : tuple of float
         Reference gains (K_p, K_d).
     kp_grid, kd_grid : sequence of float
         Candidate gains.
     tolerance : float
         Allowed relative excess of CE and MCTE over the reference's (0: at least as good).
+    vessel : str or pathlib.Path
+        The hull of the linear analysis and of the square: a name of :data:`~mmg_casadi.vessel.library.VESSELS`
+        or a vessel .toml file (default the KCS).
+
+    Returns
+    -------
+    TrackingDesign
+        Recommended gains (the reference's when none of the grid is better damped), their overshoot and square
+        metrics, the reference's, and the counts of candidates, feasible and better-damped points.
     """
     check_range("tolerance", tolerance, 0.0, 1.0, cls=InputError)
-    ref = _evaluate(reference[0], reference[1], speed)
+    ref = _evaluate(reference[0], reference[1], speed, vessel)
     ce_max = ref["square"]["ce"] * (1 + tolerance)
     mcte_max = ref["square"]["mcte"] * (1 + tolerance)
     best, n, feas, front = ref, 0, 0, []
@@ -127,7 +144,7 @@ def design_for_tracking(speed: float = 1.0, *, reference=PAPER_GAINS, kp_grid=KP
         for kd in kd_grid:
             if (float(kp), float(kd)) == (float(reference[0]), float(reference[1])):
                 continue
-            c = _evaluate(kp, kd, speed)
+            c = _evaluate(kp, kd, speed, vessel)
             if not c["stable"] or not math.isfinite(c["overshoot"]):
                 continue
             n += 1

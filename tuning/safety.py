@@ -148,6 +148,11 @@ def build_augmented_step(layout: Layout, config: SafetyConfig = SafetyConfig()) 
         A smooth layout (``smooth`` set).
     config : SafetyConfig
         ``kappa``, ``eps_delta``, ``eps_ye`` are used.
+
+    Returns
+    -------
+    casadi.Function
+        ``safety_aug_<key>(z, p) -> z_next``, ``z`` of :func:`augmented_size` rows.
     """
     if layout.smooth is None:
         raise InputError("layout.smooth", "a sharpness > 0 (the augmented step differentiates the smooth loop)",
@@ -306,6 +311,12 @@ def prepare_case(name: str, sc, config: SafetyConfig = SafetyConfig()) -> Safety
         The scenario (every ship with the modified sink-vortex).
     config : SafetyConfig
         ``dt``, ``max_steps``, ``horizon_margin``, ``smooth``.
+
+    Returns
+    -------
+    SafetyCase
+        Smooth layout, initial state, numeric parameters, number of steps and the exact rollout's success and
+        closest approach (L).
     """
     pr = build_problem(sc, {"k_vor0": PAPER[0], "r_safe": PAPER[1], "lam_sink": LAM_SINK})
     xf, _ = simulate_batch(pr.layout, pr.x0[:, None], pr.p[:, None])
@@ -347,6 +358,12 @@ def case_terms(acc: np.ndarray, dacc: np.ndarray, cases: list[SafetyCase], confi
         The cases (columns' order).
     config : SafetyConfig
         Weights and smoothing.
+
+    Returns
+    -------
+    dict
+        Arrays over the cases (K,): ``softmin_own``, ``softmin_fleet`` (L), ``safety_own``, ``safety_fleet``,
+        ``ce``, ``mcte`` (L) and ``objective``; and their θ-gradients (nθ, K) under the same names prefixed ``d_``.
     """
     kap, beta = config.kappa, config.beta
     floor = math.exp(-kap * config.d_cap)
@@ -422,6 +439,11 @@ class SafetyObjective:
             (k_vor0, r_safe).
         subset : sequence of int, optional
             Case indices (default all).
+
+        Returns
+        -------
+        dict
+            The dict of :func:`case_terms` plus ``index``.
         """
         t0 = time.perf_counter()
         theta = np.asarray(theta, float).ravel()
@@ -489,6 +511,12 @@ def gradient_check(objective: SafetyObjective, theta=PAPER, rel_step: float = 1e
         Relative finite-difference step.
     subset : sequence of int, optional
         Case indices (default all).
+
+    Returns
+    -------
+    dict
+        ``theta``, ``names``, ``objective``, ``ad`` and ``fd`` (the gradients), ``rel_step`` and ``rel_error_norm``
+        (``‖g_AD − g_FD‖ / ‖g_AD‖``).
     """
     theta = np.asarray(theta, float)
     J, g = objective(theta, subset)

@@ -60,6 +60,11 @@ class EvaluationLog:
         ----------
         theta : sequence of float
             Parameter values.
+
+        Returns
+        -------
+        tuple of float
+            The values rounded to 10 significant digits.
         """
         return tuple(float(f"{float(v):.10g}") for v in theta)
 
@@ -70,6 +75,11 @@ class EvaluationLog:
         ----------
         theta : sequence of float
             Parameter values.
+
+        Returns
+        -------
+        dict or None
+            The stored record, or None.
         """
         return self.records.get(self.key(theta))
 
@@ -100,6 +110,11 @@ def grid(n: int) -> list[tuple[float, float]]:
     ----------
     n : int
         Points per parameter, in [1, :data:`MAX_GRID`].
+
+    Returns
+    -------
+    list of tuple of (float, float)
+        The paper's values first, then the grid points without them.
 
     Examples
     --------

@@ -46,6 +46,11 @@ def field_params(field: str, **params) -> dict:
         The field.
     **params
         Overrides of its parameters by name (the keys of the returned dict).
+
+    Returns
+    -------
+    dict
+        Parameter name to value: the field's defaults with ``params`` applied.
     """
     if field not in FIELDS:
         raise InputError("field", f"one of: {', '.join(FIELDS)}", field)
@@ -73,6 +78,11 @@ def field_function(field: str = "inverse-square", goal=(10.0, 0.0), obstacle=(-1
         Obstacle radius (L; used by the inverse-square field).
     **params
         Field parameters overriding the defaults (:func:`field_params`).
+
+    Returns
+    -------
+    casadi.Function
+        ``field_<name>(pos) -> v``: the field velocity (2x1) at ``pos`` (2x1, L).
     """
     prm = field_params(field, **params)
     pos = ca.SX.sym("pos", 2)
@@ -113,6 +123,11 @@ def stagnation_point(field: str = "inverse-square", goal=(10.0, 0.0), obstacle=(
     **params
         Field parameters overriding the defaults (:func:`field_params`).
 
+    Returns
+    -------
+    numpy.ndarray (2,)
+        The point (x, y) where the field vanishes (L).
+
     Examples
     --------
     >>> p = stagnation_point()  # the paper's inverse-square example, d0 = 8 L
@@ -145,5 +160,10 @@ def distance_from_obstacle(point, obstacle=(-10.0, 0.0)) -> float:
     ----------
     point, obstacle : (float, float)
         The two positions (L).
+
+    Returns
+    -------
+    float
+        The distance (L).
     """
     return float(np.hypot(*(np.asarray(point, float) - np.asarray(obstacle, float))))

@@ -291,6 +291,9 @@ RUN_COLUMN_DOCS = {
     "colregs_compliant": ("bool", "encounter scorer: every risky encounter kept (empty without one; secondary)"),
     "colregs_verdicts": ("str", "encounter scorer: each risky encounter as `other:role:score:rule=0|1/...`, "
                          "encounters separated by `;` (`mmg_casadi.montecarlo.encounter_summary`)"),
+    "colregs_rule9": ("float", "COLREG Rule 9(a): the own ship's share of her time in a narrow channel on its "
+                      "starboard side (kept from 0.9; `mmg_casadi.colregs.narrow_channel`); empty when she was "
+                      "never in one"),
 }
 
 ENCOUNTER_DOCS = {
@@ -323,8 +326,8 @@ OUTCOME_DOCS = {
 }
 
 RUN_FAILURE_DOCS = {
-    "collision": "the own ship came within `collision_distance` of a ship or an obstacle centre, or touched a "
-                 "wall (a collision wins over every other failure)",
+    "collision": "the own ship came within `collision_distance` of an obstacle centre or, of a ship's, times the "
+                 "two ships' mean length (in L), or touched a wall (a collision wins over every other failure)",
     "grounding": "the own ship touched land: its centre came within half its beam of an edge of a land polygon",
     "timeout": "no collision, the own ship's outcome is `timeout`",
     "diverged": "no collision, the own ship's outcome is `diverged`",
@@ -388,6 +391,7 @@ def write_formats() -> None:
     from mmg_casadi.montecarlo.results import RUN_COLUMNS, SUMMARY_COLUMNS
     from mmg_casadi.params import PARAMETERS
     from mmg_casadi.scenarios import scenario as S
+    from mmg_casadi.scenarios import geojson_land as GJ
     from mmg_casadi.vessel.library import VESSELS
 
     methods = ", ".join(f"`{m}`" for m in METHODS)
@@ -403,6 +407,7 @@ def write_formats() -> None:
         "walls": ("array of tables", "none", "channel walls, each a polyline"),
         "land": ("array of tables", "none", "land, each a polygon; touching it is a grounding"),
         "environment": ("table", "calm water", "uniform current and steady wind (aliases of table parameters)"),
+        "chart": ("table", "none", "land from a GeoJSON file (Polygon/MultiPolygon features), after `[[land]]`"),
     }
     ship = {
         "name": ("string", "`ship<i>`", "", "unique name"),
@@ -418,13 +423,20 @@ def write_formats() -> None:
                    f"speed on the leg to each waypoint, one per waypoint, each in [{lo}, {hi}]"),
         "vessel": ("string", "the table's `vessel`" if ship_defaults.get("vessel") is None else ship_defaults["vessel"],
                    "", "hull: " + ", ".join(f"`{v}`" for v in VESSELS)),
-        "length_m": ("number > 0", "none", "m", "the ship's own length, as a traffic situation gives it; kept as "
-                     "data and written back by `convert` (the simulation draws every ship as the hull of length L)"),
-        "beam_m": ("number > 0", "none", "m", "the ship's own beam (maritime-schema `dimensions.width`); data, as "
-                   "`length_m`"),
+        "length_m": ("number > 0", "its vessel's", "m", "the ship's own length, as a traffic situation gives it, "
+                     "written back by `convert`: its collision geometry (two ships collide within "
+                     "`collision_distance` times their mean length in L, the default hull's 230 m); it still sails "
+                     "its vessel's model"),
+        "beam_m": ("number > 0", "its vessel's", "m", "the ship's own beam (maritime-schema `dimensions.width`): it "
+                   "touches a wall or land at half of it"),
         "metadata": ("table", "none", "", "further static data kept as read (maritime-schema names: `id`, `mmsi`, "
                      "`imo`, `shipType`, `sogMax`, `dimensions.height`, ...) and written back by `convert`; "
                      "strings, finite numbers, booleans, arrays and tables (no datetimes)"),
+        "track": ("string or table", "none (simulated)", "L/U, L",
+                  "a replayed ship's recorded track: a CSV file with the columns `t, x, y` (relative to the scenario "
+                  "file's folder) or `{t = [...], x = [...], y = [...]}`, times increasing from at or before 0; the "
+                  "ship follows it interpolated in time instead of being simulated, and takes no `start`, "
+                  "`heading`, `speed`, `waypoints`, `speeds` or `method` (not the first ship)"),
     }
     obstacle = {
         "position": ("[x, y]", "required", "L", "centre"),
@@ -436,7 +448,16 @@ def write_formats() -> None:
                        "polygon of ≥ 3 points (closed: the last joins the first), with an area; no ship starts and "
                        "no waypoint lies inside; its edges act like walls and a ship whose centre comes within "
                        "half its beam of one grounds")}
+    chart = {
+        "land_file": ("string", "required", "", "GeoJSON file (RFC 7946, lon/lat on WGS-84) relative to the scenario "
+                      "file's folder; each Polygon's exterior ring is one land polygon (interior rings ignored)"),
+        "origin": ("[lat, lon]", "the converted scenario's reference", "deg",
+                   "the local frame's (0, 0): positions are projected on the azimuthal equidistant plane about it, "
+                   "as the maritime-schema import does; required unless the file's header records a reference"),
+        "length_m": ("number > 0", "`230.0` (or the header's)", "m", "metres per ship length L"),
+    }
     _check_keys("top-level scenario tables", tables, S.TOP_KEYS)
+    _check_keys("[chart] keys", chart, GJ.CHART_KEYS)
     _check_keys("[[land]] keys", land, S.LAND_KEYS)
     _check_keys("[[ships]] keys", ship, S.SHIP_KEYS)
     _check_keys("[[obstacles]] keys", obstacle, S.OBSTACLE_KEYS)
@@ -459,7 +480,7 @@ def write_formats() -> None:
     rows += [param_row(k, k) for k in S.SETTINGS_KEYS if k != "method"]
     out += _table(("key", "type", "default", "allowed", "meaning"), rows)
     for title, spec in (("`[[ships]]`", ship), ("`[[obstacles]]`", obstacle), ("`[[walls]]`", wall),
-                        ("`[[land]]`", land)):
+                        ("`[[land]]`", land), ("`[chart]`", chart)):
         out += [f"### {title}", ""]
         out += _table(("key", "type", "default", "unit", "meaning"), ((f"`{k}`", *v) for k, v in spec.items()))
     out += ["### `[environment]`", "",

@@ -15,7 +15,8 @@ those of the unrolled step to the bit as long as no more than ``K`` agents are c
 documented: with more than ``K`` candidates the ship keeps its ``K`` nearest (:func:`neighbour_lists` counts the
 overflows), and the closest approach ``d_min`` is recorded among the candidates only (a ship that never had
 anyone within the candidate radius ends with no closest approach instead of a large one). Collisions (within
-the collision distance, far inside R_safe) are recorded exactly.
+each pair's collision distance, from the two ships' lengths gathered with the slots, far inside R_safe) are
+recorded exactly.
 
 Examples
 --------
@@ -35,6 +36,7 @@ from scipy.spatial import cKDTree
 
 from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, SHIP_PARAMS, Layout
 from mmg_casadi.closed_loop.step import _ROW, ENVELOPE, NAUX, _models, _ship_update, meet, ship_kinematics
+from mmg_casadi.vessel.library import pair_collision_distance
 
 AGENT_ROWS = 6
 """Rows of the agent table the slots are gathered from: position (2), velocity over the ground (2), presence,
@@ -60,6 +62,11 @@ def candidate_radius(r_safe: float, dt: float, chunk: int) -> float:
     chunk : int
         Steps of the chunk.
 
+    Returns
+    -------
+    float
+        ``r_safe + 2 V_MAX dt chunk`` (L).
+
     Examples
     --------
     >>> round(candidate_radius(15.0, 0.25, 4), 3)
@@ -82,6 +89,13 @@ def neighbour_lists(layout: Layout, x: np.ndarray, p: np.ndarray, radius: float)
         Parameter vector.
     radius : float
         Candidate radius (L; :func:`candidate_radius`).
+
+    Returns
+    -------
+    neighbours : numpy.ndarray (K, N)
+        Agent indices of each ship's neighbours (floats, increasing, padded with ``N + S``).
+    overflow : int
+        Number of ships with more than ``K`` candidates.
     """
     N, S, K = layout.n_ships, layout.n_obstacles, layout.neighbours
     pts = np.column_stack([x[layout.rows("x")], x[layout.rows("y")]])
@@ -158,15 +172,18 @@ def _ship_functions(layout: Layout) -> dict:
     mmgs = _models(layout)
     updates = []
     for n, (method, vessel) in enumerate(_combos(layout)):
-        new, aux = _ship_update(layout, 0, c, mmgs[vessel], 1, sparse=True, nb=slots, method=method)
+        new, aux = _ship_update(layout, 0, c, mmgs[vessel], 1, sparse=True, nb=slots, method=method, vessel=vessel)
         updates.append(ca.Function(f"fleet_sail{n}_{key}", args, [new, aux], {"cse": True}))
     hold = ca.Function(f"fleet_hold_{key}", args, [sym["x"], ca.DM.nan(NAUX, 1)])
     # bookkeeping: closest approach among the slots and first collision with a slot or a wall, after the step
-    xn, nb_vec, nb_idx = ca.SX.sym("xn", layout.ns), ca.SX.sym("nb_next", 3 * K), ca.SX.sym("nb_idx", K)
-    nb_next = ca.reshape(nb_vec, 3, K)
+    xn, nb_vec, nb_idx = ca.SX.sym("xn", layout.ns), ca.SX.sym("nb_next", 4 * K), ca.SX.sym("nb_idx", K)
+    nb_next = ca.reshape(nb_vec, 4, K)  # position, presence and length of each slot after the step
     P = c["P"]
     rows = tuple(xn[S_[k]] for k in _ROW)
-    slots = [(nb_idx[k], nb_next[0:2, k], nb_next[2, k]) for k in range(K)]
+    cd, ell, N = P["collision_distance"], P["ships"][0]["length"], layout.n_ships
+    slots = [(nb_idx[k], nb_next[0:2, k], nb_next[2, k],
+              ca.if_else(nb_idx[k] < N - 0.5, pair_collision_distance(cd, ell, nb_next[3, k]), cd))
+             for k in range(K)]  # a slot below N is a ship, the others are obstacles or padding
     met = meet(layout, P, ca.vertcat(xn[S_["x"]], xn[S_["y"]]), rows, c["present"][0], c["running"], sym["t"],
                slots, P["ships"][0]["half_beam"])
     r0, r1 = layout.column(_ROW[0]), layout.column(_ROW[-1]) + 1
@@ -226,13 +243,14 @@ def build_fleet_step(layout: Layout) -> ca.Function:
     new, aux = ship.map(N)(which, X, SP, g, walls, env, t, NB)
     # closest approach and collisions, from the positions after the step, for ships present at its start
     rows_xy = [layout.column("x"), layout.column("y")]
-    after = ca.horzcat(ca.vertcat(new[rows_xy, :], shared[4, :]),
-                       ca.vertcat(obs[0:2, :], ca.MX.ones(1, S)), ca.DM([FAR, FAR, 0.0]))
-    NB3 = _gather(after, nbr, 3)
+    lengths = SP[SHIP_PARAMS.index("length"), :]
+    after = ca.horzcat(ca.vertcat(new[rows_xy, :], shared[4, :], lengths),
+                       ca.vertcat(obs[0:2, :], ca.MX.ones(1, S), ca.MX.zeros(1, S)), ca.DM([FAR, FAR, 0.0, 0.0]))
+    NB4 = _gather(after, nbr, 4)
     running = t < p[GLOBAL_PARAMS.index("t_max")] - 1e-9
     counts = ca.logic_and(shared[4, :], running)
     row = ca.Function.conditional(f"fleet_row_{key}", [f["keep"]], f["meet"])
-    rows = row.map(N)(counts, X, SP, g, walls, t, new, NB3, nbr)
+    rows = row.map(N)(counts, X, SP, g, walls, t, new, NB4, nbr)
     r0, r1 = layout.column(_ROW[0]), layout.column(_ROW[-1]) + 1
     X_next = ca.vertcat(new[:r0, :], rows, new[r1:, :])
     clock = ca.if_else(running, t + p[GLOBAL_PARAMS.index("dt")], t)

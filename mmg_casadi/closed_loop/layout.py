@@ -20,8 +20,9 @@ import numpy as np
 
 from mmg_casadi.guidance import methods
 from mmg_casadi.guidance.ilos import validate_waypoints
+from mmg_casadi.closed_loop.replay import track_values
 from mmg_casadi.params import PARAMETERS, resolve
-from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel, ship_size
 from mmg_casadi.vessel.ship import ShipParams
 
 SHIP_STATE = (
@@ -53,11 +54,14 @@ GLOBAL_PARAMS = (
 """Numeric inputs of the compiled step, in order: the table's parameters (:mod:`mmg_casadi.params`) with the
 angles ``delta_max`` and ``gamma_max`` in rad (the table holds them in degrees); see :func:`step_values`."""
 _DEG_INPUTS = {"delta_max": "delta_max_deg", "gamma_max": "gamma_max_deg"}
-SHIP_PARAMS = ("n_rpm", "n_path", "stays", "engine_rate", "half_beam", "engine_lag", "rpm_min", "rpm_max")
+SHIP_PARAMS = ("n_rpm", "n_path", "stays", "engine_rate", "half_beam", "length", "engine_lag", "rpm_min",
+               "rpm_max")
 """Per-ship numeric inputs: service propeller speed (rev/min), waypoint count, whether the ship stays as an obstacle
-after its goal, the engine's largest rate (rev/min per L/U of the ship's vessel), half its vessel's beam (L, the
-distance at which its side touches a wall), the engine's time constant (L/U) and the range of propeller speeds a
-method may command (rev/min)."""
+after its goal, the engine's largest rate (rev/min per L/U of the own ship), half its beam (L, the distance at
+which its side touches a wall), its length (L; two ships collide within ``collision_distance`` times their mean
+length, :func:`~mmg_casadi.vessel.library.pair_collision_distance`), the engine's time constant (L/U) and the
+range of propeller speeds a method may command (rev/min). Length and beam are the ship's own (``length_m``,
+``beam_m``) or its vessel's (:func:`~mmg_casadi.vessel.library.ship_size`)."""
 
 ENV_INPUTS = ("V_c", "beta_c", "U_w", "psi_w", "crab")
 """Trailing numeric inputs of a disturbed step (:attr:`Layout.disturbed`): the model's disturbance ``env =
@@ -103,6 +107,13 @@ class Layout:
         How many of the ``n_walls`` segments, the last ones, are edges of land polygons: they are walls to the
         step (field and contact alike, so the compiled code is the same), and touching one is a grounding
         (:func:`mmg_casadi.closed_loop.outcome.collision_kind`).
+    replay : tuple of int
+        Indices of the replayed ships, increasing (:mod:`mmg_casadi.closed_loop.replay`): they follow a recorded
+        track given as numeric inputs after all the others (:meth:`split_params`); empty for none, which leaves
+        the layout's step and key as without this field. Not with the fleet step (``neighbours``).
+    max_track : int
+        Columns of each replayed ship's padded track (:func:`mmg_casadi.closed_loop.replay.track_columns`); 0
+        without replayed ships.
     """
 
     methods: tuple
@@ -118,10 +129,25 @@ class Layout:
     vessels: tuple = ()
     neighbours: int = 0
     n_land: int = 0
+    replay: tuple = ()
+    max_track: int = 0
 
     def __post_init__(self):
         if not 0 <= self.n_land <= self.n_walls:
             raise ValueError(f"n_land: expected 0 to n_walls = {self.n_walls} land edges, got {self.n_land}")
+        self._check_replay()
+
+    def _check_replay(self) -> None:
+        """The replayed ships are distinct ship indices in increasing order, with a padded track of at least two
+        columns, and the layout is not a fleet layout."""
+        object.__setattr__(self, "replay", tuple(int(i) for i in self.replay))
+        if list(self.replay) != sorted(set(self.replay)) or any(not 0 <= i < self.n_ships for i in self.replay):
+            raise ValueError(f"replay: expected increasing ship indices in [0, {self.n_ships}), got {self.replay}")
+        if self.replay and (self.max_track < 2 or self.neighbours):
+            raise ValueError(f"replay: expected max_track >= 2 and no neighbour slots, got max_track="
+                             f"{self.max_track}, neighbours={self.neighbours}")
+        if not self.replay and self.max_track:
+            raise ValueError(f"max_track: expected 0 without replayed ships, got {self.max_track}")
 
     @property
     def n_ships(self) -> int:
@@ -135,8 +161,31 @@ class Layout:
         ----------
         i : int
             Ship index.
+
+        Returns
+        -------
+        str
+            A name of :data:`~mmg_casadi.vessel.library.VESSELS` (the default vessel when :attr:`vessels` is empty).
         """
         return self.vessels[i] if self.vessels else DEFAULT_VESSEL
+
+    def unit_vessel(self) -> str:
+        """The hull whose length L and design speed U_des are the scene's units: the own ship's (ship 0).
+
+        Every other hull sails in these units (:func:`~mmg_casadi.vessel.mmg.in_scene_units`): positions in the
+        own ship's L, speeds in her U_des, time in her L/U_des.
+
+        Returns
+        -------
+        str
+            The vessel name of ship 0.
+
+        Examples
+        --------
+        >>> Layout(("none", "none"), vessels=("kvlcc2", "kcs")).unit_vessel()
+        'kvlcc2'
+        """
+        return self.vessel(0)
 
     @functools.cached_property
     def memory(self) -> tuple[str, ...]:
@@ -173,6 +222,11 @@ class Layout:
         ship : int
             Ship index.
 
+        Returns
+        -------
+        int
+            Row index in the scenario state vector.
+
         Examples
         --------
         >>> lay = Layout(("none", "none"))
@@ -188,6 +242,11 @@ class Layout:
         ----------
         name : str
             A name of :attr:`ship_state`.
+
+        Returns
+        -------
+        int
+            Column index within a ship's block.
         """
         return self._columns[name]
 
@@ -202,6 +261,11 @@ class Layout:
         ----------
         name : str
             A name of :attr:`ship_state`.
+
+        Returns
+        -------
+        list of int
+            One row index per ship.
         """
         first = self.row(name, 0)
         return list(range(first, first + self.n_ships * self.ns, self.ns))
@@ -213,6 +277,11 @@ class Layout:
         ----------
         ship : int
             Ship index.
+
+        Returns
+        -------
+        slice
+            Rows ``1 + ship ns`` to ``1 + (ship + 1) ns`` (exclusive) of the scenario state.
         """
         return slice(1 + ship * self.ns, 1 + (ship + 1) * self.ns)
 
@@ -223,19 +292,38 @@ class Layout:
     @property
     def method_inputs(self) -> tuple[str, ...]:
         """Numeric step inputs of the methods this layout uses (the ``inputs`` of each
-        :class:`mmg_casadi.guidance.methods.Method`), after the others in the parameter vector."""
+        :class:`mmg_casadi.guidance.methods.Method`, then, with walls, its ``wall_inputs``, and with land
+        ``grounding_margin``; each once), after the others in the parameter vector."""
         used = set(self.methods)
-        return tuple(k for n, m in methods.METHODS.items() if n in used for k in m.inputs)
+        names = [k for n, m in methods.METHODS.items() if n in used for k in m.inputs]
+        if self.n_walls:
+            names += [k for n, m in methods.METHODS.items() if n in used for k in m.wall_inputs]
+        if self.n_land:
+            names.append("grounding_margin")
+        return tuple(dict.fromkeys(names))
 
     @property
     def np(self) -> int:
         """Rows of the parameter vector."""
         return (len(GLOBAL_PARAMS) + self.n_ships * (self.ship_params_size)
                 + 3 * self.n_obstacles + 4 * self.n_walls + (len(ENV_INPUTS) if self.disturbed else 0)
-                + len(self.method_inputs))
+                + len(self.method_inputs) + self.track_params_size)
+
+    @property
+    def track_params_size(self) -> int:
+        """Rows of the parameter vector holding the replayed ships' tracks, its last block: per replayed ship the
+        track's last time and the padded rows t, x, y (:func:`mmg_casadi.closed_loop.replay.track_values`)."""
+        return len(self.replay) * (1 + 3 * self.max_track)
 
     def key(self) -> str:
-        """Short identifier used in Function names."""
+        """Short identifier used in Function names.
+
+        Returns
+        -------
+        str
+            Methods, obstacle, wall and path counts, VO settings and any smoothing, disturbance, vessel, neighbour and
+            speed-level tags, e.g. ``'vox2_o0_w0_k2_v80huangh'``; equal layouts give equal keys.
+        """
         meth = "_".join(m.replace("-", "") for m in self.methods)
         if len(set(self.methods)) == 1:
             meth = f"{self.methods[0].replace('-', '')}x{self.n_ships}"
@@ -249,12 +337,20 @@ class Layout:
             meth = "_".join(f"{m.replace('-', '')}x{n}" for m, n in runs)
         s = "" if self.smooth is None else f"_s{self.smooth:g}".replace(".", "p")
         s += "_env" if self.disturbed else ""
-        if any(v != DEFAULT_VESSEL for v in self.vessels):
-            s += "_" + "_".join(f"{v}{self.vessels.count(v)}" for v in dict.fromkeys(self.vessels))
+        if any(v != DEFAULT_VESSEL for v in self.vessels):  # the hulls in ship order, run-length encoded
+            hulls = [[self.vessels[0], 0]]
+            for v in self.vessels:
+                if v == hulls[-1][0]:
+                    hulls[-1][1] += 1
+                else:
+                    hulls.append([v, 1])
+            s += "_" + "_".join(f"{v}{n}" for v, n in hulls)
         if self.neighbours:
             s += f"n{self.neighbours}"
         if self.vo_speed_levels != PARAMETERS["vo_speed_levels"].default:
             s += f"_l{self.vo_speed_levels}"
+        if self.replay:
+            s += "".join(f"_r{i}" for i in self.replay) + f"t{self.max_track}"
         return (f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}"
                 f"{'h' if self.vo_hold else ''}{s}")
 
@@ -265,6 +361,11 @@ class Layout:
         ----------
         name : str
             A name of :data:`GLOBAL_PARAMS`.
+
+        Returns
+        -------
+        int
+            Row in the parameter vector.
         """
         return GLOBAL_PARAMS.index(name)
 
@@ -282,6 +383,11 @@ class Layout:
         ----------
         name : str
             One of ``"ships"``, ``"obstacles"``, ``"walls"``, ``"env"``.
+
+        Returns
+        -------
+        slice
+            The rows of the block (empty for ``"env"`` in an undisturbed layout).
 
         Examples
         --------
@@ -306,6 +412,13 @@ class Layout:
         ----------
         p : SX, MX, DM or ndarray
             A parameter vector of this layout (:attr:`np` rows).
+
+        Returns
+        -------
+        dict
+            Each name of :data:`GLOBAL_PARAMS` and of :attr:`method_inputs` to its entry of ``p``; ``"ships"``, a list
+            of per-ship dicts (:data:`SHIP_PARAMS`, ``"path"`` 2 x max_path, ``"leg_rpm"``); ``"obstacles"``
+            (3 x n_obstacles), ``"walls"`` (4 x n_walls) and, when disturbed, ``"env"``. Entries have the type of ``p``.
         """
         out = {}
         i = 0
@@ -334,6 +447,14 @@ class Layout:
         for name in self.method_inputs:
             out[name] = p[i]
             i += 1
+        if self.replay:
+            out["tracks"] = {}
+            T = self.max_track
+            for ship in self.replay:
+                out["tracks"][ship] = {"t_end": p[i], "t": [p[i + 1 + k] for k in range(T)],
+                                       "x": [p[i + 1 + T + k] for k in range(T)],
+                                       "y": [p[i + 1 + 2 * T + k] for k in range(T)]}
+                i += 1 + 3 * T
         assert i == self.np
         return out
 
@@ -342,10 +463,11 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
     """Numeric parameter vector for ``layout``.
 
     ``ships[i]`` has ``n_rpm``, ``path`` (K_i x 2 array: start then waypoints), ``stays`` and optionally
-    ``leg_rpm`` (K_i propeller speeds, entry k on the leg to path point k; default ``n_rpm`` on every leg); paths
+    ``leg_rpm`` (K_i propeller speeds, entry k on the leg to path point k; default ``n_rpm`` on every leg),
+    ``length`` and ``half_beam`` (L; default its vessel's, :func:`~mmg_casadi.vessel.library.ship_size`); paths
     are padded to ``layout.max_path`` columns by repeating the last waypoint. The engine's rate is the table's
-    ``engine_rate_rpm_s`` (in ``globals_``) on the time scale of each ship's vessel. ``obstacles`` are ``(x, y, radius)``, walls
-    ``(ax, ay, bx, by)``; ``env`` the :data:`ENV_INPUTS` of a disturbed layout (:func:`env_values`).
+    ``engine_rate_rpm_s`` (in ``globals_``) on the scene's time scale, the own ship's L/U_des. ``obstacles`` are
+    ``(x, y, radius)``, walls ``(ax, ay, bx, by)``; ``env`` the :data:`ENV_INPUTS` of a disturbed layout (:func:`env_values`).
 
     Parameters
     ----------
@@ -361,9 +483,13 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
         Wall segments ``(ax, ay, bx, by)`` (L).
     env : dict, optional
         The :data:`ENV_INPUTS` of a disturbed layout (:func:`env_values`).
+
+    Returns
+    -------
+    numpy.ndarray (np,)
+        The parameter vector (lengths in L, times in L/U, angles in rad, propeller speeds in rev/min).
     """
     vals = [float(globals_[name]) for name in GLOBAL_PARAMS]
-    length_unit = load_vessel().ship.L  # lengths are in the default vessel's length
     for i, s in enumerate(ships):
         path = np.asarray(validate_waypoints(s["path"], f"ships[{i}].path"))
         k = len(path)
@@ -371,11 +497,14 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
             raise ValueError(f"path of {k} points exceeds layout.max_path={layout.max_path}")
         padded = np.vstack([path, np.repeat(path[-1:], layout.max_path - k, axis=0)])
         hull = load_vessel(layout.vessel(i)).ship
-        rate = float(globals_["engine_rate_rpm_s"]) * hull.time_scale_s
-        lag = float(globals_["engine_lag_s"]) / hull.time_scale_s
+        scene_time_s = load_vessel(layout.unit_vessel()).ship.time_scale_s  # the own ship's L/U_des
+        rate = float(globals_["engine_rate_rpm_s"]) * scene_time_s
+        lag = float(globals_["engine_lag_s"]) / scene_time_s
         rpm_range = [float(globals_[k]) * hull.n_design_rpm for k in ("engine_dead_slow", "engine_rpm_max")]
-        vals += [float(s["n_rpm"]), float(k), float(bool(s.get("stays", False))), rate, 0.5 * hull.B / length_unit,
-                 lag, *rpm_range]
+        length, half_beam = ship_size(layout.vessel(i), unit=layout.unit_vessel())
+        length, half_beam = float(s.get("length", length)), float(s.get("half_beam", half_beam))
+        vals += [float(s["n_rpm"]), float(k), float(bool(s.get("stays", False))), rate, half_beam, length, lag,
+                 *rpm_range]
         vals += list(padded.reshape(-1))  # column-major (x0, y0, x1, y1, ...) = reshape(2, K)
         legs = [float(v) for v in s.get("leg_rpm", [s["n_rpm"]] * k)]
         if len(legs) != k:
@@ -390,6 +519,8 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
             raise ValueError(f"a disturbed layout needs env = {ENV_INPUTS}, got {env!r}")
         vals += [float(v) for v in env]
     vals += [float(globals_[name]) for name in layout.method_inputs]
+    for i in layout.replay:  # replayed ships: ships[i]["track"] = (t, x, y), the parameter vector's last block
+        vals += track_values(*ships[i]["track"], layout.max_track)
     p = np.array(vals)
     assert p.size == layout.np
     return p
@@ -405,6 +536,12 @@ def step_values(resolved: dict) -> dict:
     resolved : dict
         A resolved parameter set (table names and units).
 
+    Returns
+    -------
+    dict
+        Name to float: every :data:`GLOBAL_PARAMS` entry, every method input and the engine parameters, angles in
+        rad.
+
     Examples
     --------
     >>> g = step_values(resolve())
@@ -416,9 +553,9 @@ def step_values(resolved: dict) -> dict:
         src = _DEG_INPUTS.get(name)
         out[name] = math.radians(float(resolved[src])) if src else float(resolved[name])
     for m in methods.METHODS.values():
-        for name in m.inputs:
+        for name in m.inputs + m.wall_inputs:
             out[name] = math.radians(float(resolved[name + "_deg"])) if name not in resolved else float(resolved[name])
-    for name in ("engine_rate_rpm_s", "engine_lag_s", "engine_dead_slow", "engine_rpm_max"):
+    for name in ("engine_rate_rpm_s", "engine_lag_s", "engine_dead_slow", "engine_rpm_max", "grounding_margin"):
         out[name] = float(resolved[name])
     return out
 
@@ -486,6 +623,11 @@ def default_globals(**overrides) -> dict:
     ----------
     **overrides : float
         Parameter values by table name, replacing the defaults.
+
+    Returns
+    -------
+    dict
+        The step's numeric inputs, as :func:`step_values` gives them.
 
     Examples
     --------

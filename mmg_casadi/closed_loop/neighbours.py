@@ -37,11 +37,21 @@ def dispatch_args(layout: Layout, g: GuidanceInputs) -> list:
         Closed-loop layout of the step.
     g : GuidanceInputs
         The ship's guidance inputs (all its neighbours, masked by ``active``).
+
+    Returns
+    -------
+    list
+        ``[pos, vel, psi, speed, goal, nb_pos, nb_vel, nb_radius, active, memory, service_rpm, scalars]``: CasADi
+        expressions, ``scalars`` the method's named parameters stacked; in a layout with walls, then ``walls``
+        and ``half_beam`` (the land test's).
     """
     spec_memory = tuple(g.memory)
-    return [g.pos, g.vel, g.psi, g.speed, g.goal, g.nb_pos, g.nb_vel, g.nb_radius, g.active,
+    args = [g.pos, g.vel, g.psi, g.speed, g.goal, g.nb_pos, g.nb_vel, g.nb_radius, g.active,
             _memory_vector(spec_memory, g.memory), g.service_rpm,
             ca.vertcat(*[g.P[k] for k in _method_scalars(layout)])]
+    if layout.n_walls:  # the walls and the half beam of the methods' land test
+        args += [g.walls, g.half_beam]
+    return args
 
 
 @functools.lru_cache(maxsize=None)
@@ -70,6 +80,10 @@ def within_range(layout: Layout, method: str, m: int) -> ca.Function:
            ca.SX.sym("P", len(names))]
     pos, vel, psi, speed, goal, nb_pos, nb_vel, nb_rad, active, mem, rpm, pv = sym
     P = {k: pv[n] for n, k in enumerate(names)}
+    walls = half_beam = None
+    if layout.n_walls:
+        walls, half_beam = ca.SX.sym("walls", 4, layout.n_walls), ca.SX.sym("half_beam")
+        sym += [walls, half_beam]
 
     def branch(slots):
         if slots >= m:
@@ -89,7 +103,8 @@ def within_range(layout: Layout, method: str, m: int) -> ca.Function:
             g_act = ca.horzcat(*[cq[3] for cq in cols])
         g = GuidanceInputs(pos=pos, vel=vel, psi=psi, speed=speed, goal=goal, nb_pos=g_pos, nb_vel=g_vel,
                            nb_radius=g_rad, active=g_act, P=P, layout=layout,
-                           memory={k: mem[j] for j, k in enumerate(spec.memory)}, service_rpm=rpm)
+                           memory={k: mem[j] for j, k in enumerate(spec.memory)}, service_rpm=rpm, walls=walls,
+                           half_beam=half_beam)
         return ca.Function(f"{method.replace('-', '')}_{layout.key()}_m{m}_s{min(slots, m)}", sym,
                            [command_vector(spec, spec.builder(g))], {"cse": True})
 

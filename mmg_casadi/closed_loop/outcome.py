@@ -38,6 +38,13 @@ def ship_outcome(row, t_end: float, stall_window: float) -> tuple[str, tuple[flo
     stall_window : float
         A ship that has not come closer to its goal for this long is stalled (L/U).
 
+    Returns
+    -------
+    outcome : str
+        One of :data:`OUTCOMES`.
+    stalled_at : tuple of float or None
+        For ``"stalled"``, the position (x, y) closest to the goal (L); else None.
+
     Examples
     --------
     >>> row = np.zeros(len(SHIP_STATE)); row[S_["status"]] = 1
@@ -74,6 +81,13 @@ def voyage_metrics(rows: np.ndarray, t_end: float, delta_max: float) -> tuple[np
     delta_max : float
         Largest rudder angle δ_max (rad).
 
+    Returns
+    -------
+    ce : numpy.ndarray (N,)
+        Controller effort CE (dimensionless; nan for a diverged ship).
+    mcte : numpy.ndarray (N,)
+        Mean cross-track error MCTE (L; nan for a diverged ship).
+
     Examples
     --------
     >>> rows = np.zeros((1, len(SHIP_STATE))); rows[0, S_["status"]] = 1; rows[0, S_["t_goal"]] = 10.0
@@ -101,6 +115,11 @@ def collision_kind(layout: Layout, agent: int) -> str:
         Closed-loop layout of the run.
     agent : int
         Agent index: ships ``0..N-1``, then obstacles, then wall segments.
+
+    Returns
+    -------
+    str
+        ``"ship"``, ``"obstacle"``, ``"wall"`` or ``"land"``.
 
     Examples
     --------
@@ -131,6 +150,13 @@ def ship_outcomes(layout: Layout, x_final, params: dict) -> list[dict]:
         Final scenario state.
     params : dict
         The resolved parameter set (reads ``delta_max_deg`` and ``stall_window``).
+
+    Returns
+    -------
+    list of dict
+        One dict per ship: ``status``, ``stalled_at`` (L) and ``stalled_time``, ``time_to_goal``, ``ce``, ``mcte``
+        (L), ``collision_time`` (L/U), ``collision_with``, ``collision_kind``, ``min_distance`` (L),
+        ``min_distance_with`` and ``reactive_time`` (L/U); None where not applicable.
     """
     x = np.asarray(x_final, float).ravel()
     rows = ship_rows(layout, x)

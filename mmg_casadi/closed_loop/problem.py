@@ -11,6 +11,7 @@ import casadi as ca
 import numpy as np
 
 from mmg_casadi.closed_loop import state as state_
+from mmg_casadi.closed_loop.replay import track_columns
 from mmg_casadi.closed_loop.layout import Layout, env_values, is_disturbed, pack_params, step_values
 from mmg_casadi.closed_loop.outcome import ship_outcomes
 from mmg_casadi.closed_loop.simulation import compiled_step
@@ -19,7 +20,7 @@ from mmg_casadi.errors import ParameterError, ScenarioError
 from mmg_casadi.guidance import methods
 from mmg_casadi.limits import check_size, check_steps, check_unrolled
 from mmg_casadi.params import resolve
-from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel, ship_size
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
 
 @dataclass(frozen=True)
@@ -55,12 +56,23 @@ class ClosedLoopModel:
         ----------
         smooth : float, optional
             ``None`` for the exact switching logic, else the sigmoid sharpness of the smoothed step (tuning).
+
+        Returns
+        -------
+        casadi.Function
+            ``(x, p) -> (x_next, aux)`` of :func:`~mmg_casadi.closed_loop.step.build_closed_loop_step` (dense SX).
         """
         lay = self.layout if smooth is None else dataclasses.replace(self.layout, smooth=float(smooth))
         return build_closed_loop_step(lay)
 
     def compiled_step(self) -> ca.Function:
-        """The natively compiled exact step the rollouts use (its sparse form, cached on disk)."""
+        """The natively compiled exact step the rollouts use (its sparse form, cached on disk).
+
+        Returns
+        -------
+        casadi.Function
+            :func:`~mmg_casadi.closed_loop.simulation.compiled_step` of the model's layout.
+        """
         return compiled_step(self.layout)
 
     def pack(self, ships: list[dict], obstacles=(), walls=()) -> np.ndarray:
@@ -74,6 +86,11 @@ class ClosedLoopModel:
             Static obstacles.
         walls : sequence of (ax, ay, bx, by)
             Wall segments.
+
+        Returns
+        -------
+        numpy.ndarray (np,)
+            Parameter vector ``p`` of the layout.
         """
         return pack_params(self.layout, self.values, ships, obstacles, walls,
                            env_values(self.params) if self.layout.disturbed else None)
@@ -85,6 +102,11 @@ class ClosedLoopModel:
         ----------
         ships : list of dict
             Per ship ``start``, ``heading`` (rad), ``speed`` and ``path``.
+
+        Returns
+        -------
+        numpy.ndarray (nx,)
+            Scenario state at t = 0.
         """
         return state_.initial_state(self.layout, ships)
 
@@ -95,6 +117,11 @@ class ClosedLoopModel:
         ----------
         X : ndarray
             One scenario state ``(nx,)`` or states as columns ``(nx, T)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(N, NS)`` or ``(T, N, NS)``, the columns named by ``Layout.ship_state``.
         """
         return state_.ship_rows(self.layout, X)
 
@@ -109,6 +136,11 @@ class ClosedLoopModel:
             A name of :attr:`Layout.ship_state <mmg_casadi.closed_loop.layout.Layout.ship_state>`.
         ship : int, optional
             Ship index; all ships if omitted.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(N,)`` or ``(T, N)`` for all ships, a scalar or ``(T,)`` for ``ship``, in the state's units.
         """
         return state_.state_of(self.layout, x, name, ship)
 
@@ -121,6 +153,11 @@ class ClosedLoopModel:
         ----------
         x_final : ndarray (nx,)
             Final scenario state.
+
+        Returns
+        -------
+        list of dict
+            One dict per ship, as :func:`~mmg_casadi.closed_loop.outcome.ship_outcomes` gives them.
         """
         return ship_outcomes(self.layout, x_final, self.params)
 
@@ -170,6 +207,11 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
     error : type, optional
         Error class for a bad override (default :class:`~mmg_casadi.errors.ParameterError`).
 
+    Returns
+    -------
+    Problem
+        The model (layout and resolved parameters), initial state ``x0``, parameter vector ``p`` and per-ship inputs.
+
     Examples
     --------
     >>> from mmg_casadi.scenarios.scenario import Scenario, Settings, ShipSpec
@@ -180,6 +222,8 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
     """
     resolved = sc.settings.resolved(params, cls=error or ParameterError)
     methods_ = tuple(sc.method_of(i) for i in range(len(sc.ships)))
+    replayed = tuple(i for i, s in enumerate(sc.ships) if getattr(s, "track", None) is not None)
+    methods_ = tuple("none" if i in replayed else m for i, m in enumerate(methods_))  # not steered
     for i, m in enumerate(methods_):
         if m not in methods.METHODS:
             raise ScenarioError(f"ships[{i}].method", f"one of: {', '.join(methods.NAMES)}", m)
@@ -202,19 +246,51 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
                     vo_speed_levels=resolved["vo_speed_levels"],
                     vessels=() if set(vessels) == {DEFAULT_VESSEL} else vessels,
                     neighbours=resolved["neighbour_slots"] if len(sc.ships) >= resolved["fleet_from_ships"] else 0,
-                    n_land=len(land))
+                    n_land=len(land), **_replay_layout(sc, replayed, resolved, error or ParameterError))
     model = ClosedLoopModel(layout, resolved)
-    ships = tuple(_ship_inputs(s, load_vessel(v).ship) for s, v in zip(sc.ships, vessels))
+    ships = tuple(_ship_inputs(_engine_speed(s), load_vessel(v).ship, v, unit=vessels[0])
+                  for s, v in zip(sc.ships, vessels))
+    ships = tuple(_with_track(s, d) for s, d in zip(sc.ships, ships))
     obstacles = [(o.position[0], o.position[1], o.radius) for o in sc.obstacles]
     return Problem(model, model.initial_state(list(ships)), model.pack(list(ships), obstacles, walls), ships)
 
 
-def _ship_inputs(s, hull) -> dict:
+def _replay_layout(sc, replayed: tuple, resolved: dict, error) -> dict:
+    """The :class:`Layout` fields of the replayed ships (none: no field, so the layout is as without them)."""
+    if not replayed:
+        return {}
+    if len(sc.ships) >= resolved["fleet_from_ships"]:
+        raise error("fleet_from_ships", f"more than the {len(sc.ships)} ships of a scenario with replayed ships "
+                    "(the fleet step replays no track)", resolved["fleet_from_ships"])
+    return {"replay": replayed, "max_track": track_columns(max(len(sc.ships[i].track) for i in replayed))}
+
+
+def _engine_speed(s):
+    """``s``, or for a replayed ship ``s`` at the design speed: the speed sets only the engine's propeller speed,
+    which a replayed ship does not use (its recorded speed may be zero)."""
+    if getattr(s, "track", None) is None:
+        return s
+    return dataclasses.replace(s, speed=1.0)
+
+
+def _with_track(s, inputs: dict) -> dict:
+    """The per-ship inputs of scenario ship ``s``, with its track and its recorded speed at t = 0 if it is
+    replayed (:mod:`mmg_casadi.closed_loop.replay`)."""
+    track = getattr(s, "track", None)
+    if track is None:
+        return inputs
+    return {**inputs, "track": (track.t, track.x, track.y), "speed": s.speed}
+
+
+def _ship_inputs(s, hull, vessel=None, unit=None) -> dict:
     """The per-ship dict of :func:`~mmg_casadi.closed_loop.layout.pack_params` and
-    :func:`~mmg_casadi.closed_loop.state.initial_state` for scenario ship ``s`` of vessel ``hull``."""
+    :func:`~mmg_casadi.closed_loop.state.initial_state` for scenario ship ``s`` of vessel ``hull`` (named
+    ``vessel``): its collision geometry (``length``, ``half_beam`` in L, the own ship's hull ``unit``) from its own
+    ``length_m`` and ``beam_m``, else its vessel's (:func:`~mmg_casadi.vessel.library.ship_size`)."""
     n_rpm = propeller_rpm_for_speed(s.speed, hull)
     legs = [n_rpm] * (1 + len(s.waypoints))
     if getattr(s, "speeds", None) is not None:
         legs = [n_rpm] + [propeller_rpm_for_speed(v, hull) for v in s.speeds]
+    length, half_beam = ship_size(vessel, getattr(s, "length_m", None), getattr(s, "beam_m", None), unit=unit)
     return {"n_rpm": n_rpm, "path": [s.start, *s.waypoints], "stays": s.stays, "start": s.start,
-            "heading": s.heading_rad, "speed": s.speed, "leg_rpm": legs}
+            "heading": s.heading_rad, "speed": s.speed, "leg_rpm": legs, "length": length, "half_beam": half_beam}

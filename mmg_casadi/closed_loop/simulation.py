@@ -30,6 +30,11 @@ def rollout_functions(layout: Layout) -> list[ca.Function]:
     ----------
     layout : Layout
         Closed-loop layout (ships, obstacles, walls, method) of the Functions.
+
+    Returns
+    -------
+    list of casadi.Function
+        ``[fleet step]`` for a fleet layout, else ``[closed-loop step, guidance]`` (sparse for an exact layout).
     """
     if layout.neighbours:
         return [build_fleet_step(layout)]
@@ -51,6 +56,11 @@ def compiled_step(layout: Layout) -> ca.Function:
     ----------
     layout : Layout
         Closed-loop layout (ships, obstacles, walls, method) of the Function.
+
+    Returns
+    -------
+    casadi.Function
+        The step ``(x, p) -> (x_next, aux)`` loaded from the compiled library.
     """
     return _library(layout)[0]
 
@@ -63,6 +73,11 @@ def compiled_guidance(layout: Layout) -> ca.Function:
     ----------
     layout : Layout
         Closed-loop layout (ships, obstacles, walls, method) of the Function (not a fleet layout).
+
+    Returns
+    -------
+    casadi.Function
+        ``guidance_<key>(x, p) -> delta_c (1 x N)`` (rad) loaded from the compiled library.
     """
     _check_unrolled(layout, "compiled_guidance")
     return _library(layout)[1]
@@ -158,6 +173,11 @@ def sailing_mask(status) -> np.ndarray:
     status : array (K, N)
         Status history (0 sailing, 1 reached, 2 diverged).
 
+    Returns
+    -------
+    numpy.ndarray of bool (K, N)
+        True where the ship sails, and at the first sample of each ship that stopped.
+
     Examples
     --------
     >>> sailing_mask(np.array([[0, 0], [0, 1], [1, 1]])).astype(int).tolist()
@@ -206,6 +226,11 @@ class Trajectory:
             A name of :attr:`~mmg_casadi.closed_loop.layout.Layout.ship_state`.
         ship : int, optional
             Ship index; all ships if omitted.
+
+        Returns
+        -------
+        numpy.ndarray
+            Values at the times :attr:`t`, in the units of the state (L, rad, U_des, L/U...).
         """
         col = self.states[:, :, self.layout.column(name)]
         return col if ship is None else col[:, ship]
@@ -219,6 +244,11 @@ class Trajectory:
             ``delta_c``, ``psi_d``, ``y_e`` or ``reactive``.
         ship : int, optional
             Ship index; all ships if omitted.
+
+        Returns
+        -------
+        numpy.ndarray
+            Values over each step: ``delta_c``, ``psi_d`` (rad), ``y_e`` (L) or ``reactive`` (1/0).
         """
         col = self.aux[:, :, AUX.index(name)]
         return col if ship is None else col[:, ship]
@@ -229,7 +259,13 @@ class Trajectory:
         return self.states[-1]
 
     def sailing_mask(self) -> np.ndarray:
-        """``(T+1, N)`` True while a ship is still sailing (:func:`sailing_mask` of its status history)."""
+        """``(T+1, N)`` True while a ship is still sailing (:func:`sailing_mask` of its status history).
+
+        Returns
+        -------
+        numpy.ndarray of bool (T+1, N)
+            The mask, True also at the sample at which a ship stopped.
+        """
         return sailing_mask(self.state("status"))
 
     def to_npz(self, path) -> None:
@@ -278,6 +314,11 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200)
         Parameter vector (:func:`~mmg_casadi.closed_loop.layout.pack_params`).
     chunk : int
         Steps per compiled ``mapaccum`` call.
+
+    Returns
+    -------
+    Trajectory
+        The history, up to the sample at which the last ship finished or ``t_max`` was reached.
     """
     fleet = layout.neighbours > 0
     if fleet:
@@ -422,6 +463,13 @@ class BatchHistory:
         ----------
         m : int
             Column (scenario) index.
+
+        Returns
+        -------
+        t : numpy.ndarray (K,)
+            Sample times (L/U).
+        states : numpy.ndarray (K, N, 4)
+            Per sample and ship: x, y (L), heading (rad) and status.
         """
         t = self.t[m]
         last = int(np.argmax(t)) + 1  # the clock stops at the horizon; later samples repeat the final state
@@ -449,6 +497,15 @@ def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chu
         Keep every ``every``-th step.
     width : int, optional
         Scenarios stepped together (``None``: all ``M``).
+
+    Returns
+    -------
+    X : numpy.ndarray (nx, M)
+        Final scenario states, one column per scenario.
+    busy : float
+        Wall time spent in compiled code (s).
+    history : BatchHistory
+        Times and ship states every ``every`` steps, the initial state first.
     """
     if isinstance(every, bool) or not isinstance(every, int) or every < 1 or chunk % every:
         raise ValueError(f"every: expected an integer >= 1 dividing chunk={chunk}, got {every!r}")

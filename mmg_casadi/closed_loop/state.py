@@ -11,11 +11,12 @@ import numpy as np
 
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.vessel.library import load_vessel
-from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
+from mmg_casadi.vessel.mmg import propeller_rpm_for_speed, scene_scales
 
 
 def initial_state(layout: Layout, ships: list[dict]) -> np.ndarray:
-    """Scenario state at t = 0: each ship at ``start`` with ``heading`` (rad) and surge speed ``speed`` × U_des.
+    """Scenario state at t = 0: each ship at ``start`` with ``heading`` (rad) and surge speed ``speed`` × U_des
+    (the ship's own design speed; the state holds it in the own ship's, :meth:`Layout.unit_vessel`).
 
     Parameters
     ----------
@@ -24,6 +25,11 @@ def initial_state(layout: Layout, ships: list[dict]) -> np.ndarray:
     ships : list of dict
         Per ship ``start`` (L), ``heading`` (rad), ``speed`` (fraction of U_des), ``path`` (L) and optionally
         ``n_rpm`` (rev/min, the engine's starting speed; default the propeller speed of a steady ``speed``).
+
+    Returns
+    -------
+    numpy.ndarray (nx,)
+        The scenario state: the time (0), then each ship's row of ``Layout.ship_state``.
 
     Examples
     --------
@@ -35,9 +41,11 @@ def initial_state(layout: Layout, ships: list[dict]) -> np.ndarray:
     """
     x = np.zeros(layout.nx)
     col = layout.column
+    unit = load_vessel(layout.unit_vessel()).ship
     for i, s in enumerate(ships):
         row = np.zeros(layout.ns)
-        row[col("u")] = float(s["speed"])
+        _, mu = scene_scales(load_vessel(layout.vessel(i)).ship, unit)
+        row[col("u")] = float(s["speed"]) if mu == 1.0 else float(s["speed"]) * mu  # in the own ship's U_des
         row[col("x")], row[col("y")] = s["start"]
         row[col("psi")] = float(s["heading"])
         row[col("n_prop")] = float(s["n_rpm"]) if "n_rpm" in s else propeller_rpm_for_speed(
@@ -66,6 +74,11 @@ def ship_rows(layout: Layout, X) -> np.ndarray:
         Closed-loop layout (ships, obstacles, walls, method) of the scenario.
     X : numpy.ndarray
         Scenario states, ``(nx, T)`` or ``(nx,)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, N, ns)`` for ``(nx, T)`` states, ``(N, ns)`` for one state.
     """
     X = np.asarray(X)
     if X.ndim == 1:
@@ -86,6 +99,11 @@ def state_of(layout: Layout, X, name: str, ship: int | None = None) -> np.ndarra
         A name of :attr:`Layout.ship_state <mmg_casadi.closed_loop.layout.Layout.ship_state>`.
     ship : int, optional
         Ship index; all ships if omitted.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,)`` or ``(T, N)`` for all ships, a scalar or ``(T,)`` for ``ship``, in the state's units.
 
     Examples
     --------

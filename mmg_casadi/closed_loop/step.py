@@ -34,6 +34,7 @@ import casadi as ca
 
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.closed_loop.neighbours import dispatch_args, within_range
+from mmg_casadi.closed_loop.replay import replay_update
 from mmg_casadi.errors import ParameterError
 from mmg_casadi.guidance import hazards, methods
 from mmg_casadi.guidance.heading_control import pd_heading
@@ -41,8 +42,8 @@ from mmg_casadi.guidance.ilos import ilos_step_terms, switch_waypoint
 from mmg_casadi.guidance.methods import GuidanceInputs, command_from_vector
 from mmg_casadi.vessel import environment
 from mmg_casadi.vessel.actuators import engine_step
-from mmg_casadi.vessel.library import load_vessel
-from mmg_casadi.vessel.mmg import NX, build_mmg, rk4
+from mmg_casadi.vessel.library import load_vessel, pair_collision_distance
+from mmg_casadi.vessel.mmg import NX, build_mmg, in_scene_units, rk4, scene_scales
 
 AUX = ("delta_c", "psi_d", "y_e", "reactive")
 """Per-ship outputs of a step besides the state: rudder command, desired heading, cross-track error, and whether
@@ -79,6 +80,12 @@ def build_closed_loop_step(layout: Layout, *, n_sub: int = 1, sparse: bool = Fal
         out by ``active`` and add exact zeros in the dense step). Same ``x_next`` as the dense step; the dense
         step (a single SX expression) is the one to differentiate.
 
+    Returns
+    -------
+    casadi.Function
+        ``closed_loop_<key>(x, p) -> (x_next, aux)``: the scenario state after one guidance step (``nx``) and the
+        ``(NAUX, N)`` auxiliary signals of the step.
+
     Examples
     --------
     >>> lay = Layout(("modified-vortex",) * 3, n_obstacles=1)
@@ -104,12 +111,21 @@ def build_closed_loop_step(layout: Layout, *, n_sub: int = 1, sparse: bool = Fal
 
 
 def _models(layout: Layout) -> dict:
-    """The MMG Function of every vessel the layout uses."""
+    """The MMG Function of every vessel the layout uses, in the scene's units (the own ship's hull,
+    :meth:`Layout.unit_vessel`; :func:`~mmg_casadi.vessel.mmg.in_scene_units`)."""
     out = {}
+    unit = load_vessel(layout.unit_vessel()).ship
     for name in dict.fromkeys(layout.vessel(i) for i in range(layout.n_ships)):
         v = load_vessel(name)
-        out[name] = build_mmg(v.ship, v.steering, disturbed=layout.disturbed)
+        out[name] = in_scene_units(build_mmg(v.ship, v.steering, disturbed=layout.disturbed), v.ship, unit)
     return out
+
+
+def _own_time(layout: Layout, vessel: str, r):
+    """The yaw rate ``r`` (per scene time unit) of a ship of ``vessel`` per unit of its own hull's time L/U_des, as
+    its heading controller sees it: the PD gains act in each hull's own units, as in ``maneuver --vessel``."""
+    lam, mu = scene_scales(load_vessel(vessel).ship, load_vessel(layout.unit_vessel()).ship)
+    return r if lam == mu else r * (lam / mu)
 
 
 def ship_kinematics(Xi, S_: dict, E, stays):
@@ -126,6 +142,15 @@ def ship_kinematics(Xi, S_: dict, E, stays):
         The disturbance inputs of a disturbed layout (:data:`~mmg_casadi.closed_loop.layout.ENV_INPUTS`).
     stays : SX
         1 if the ship stays as an obstacle after reaching its goal.
+
+    Returns
+    -------
+    pos : casadi.SX (2, 1)
+        Position (L).
+    vel : casadi.SX (2, 1)
+        Earth-fixed velocity over the ground (U_des units).
+    present : casadi.SX
+        1 if the ship counts as an obstacle, else 0.
     """
     u, v, psi, status = Xi[S_["u"]], Xi[S_["v"]], Xi[S_["psi"]], Xi[S_["status"]]
     if E is None:
@@ -161,10 +186,12 @@ def _step_context(layout: Layout, x, p, shared=None) -> dict:
 
 
 def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bool = False, nb=None,
-                 method: str | None = None):
+                 method: str | None = None, vessel: str | None = None):
     """Ship ``i``'s state after the step while it sails (``layout.ns`` rows; the caller holds a ship that does
     not) and its ``aux`` column. Its neighbours are every other ship and obstacle of ``c``, or ``nb`` = (positions,
     velocities, radii, presence) of gathered neighbour slots (the fleet step)."""
+    if i in layout.replay and nb is None:  # a replayed ship follows its track (mmg_casadi.closed_loop.replay)
+        return replay_update(layout, i, c)
     N, S, W = layout.n_ships, layout.n_obstacles, layout.n_walls
     sm = layout.smooth
     P, S_, t, X, pos, psi, vel, E = c["P"], c["S"], c["t"], c["X"], c["pos"], c["psi"], c["vel"], c["E"]
@@ -227,7 +254,8 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal,
                                 nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=active, P=P,
                                 layout=layout, memory={k: Xi[S_[k]] for k in spec.memory},
-                                service_rpm=n_service)
+                                service_rpm=n_service, walls=walls if W else None,
+                                half_beam=Pi["half_beam"] if W else None)
         if sparse and M > 1:
             command = command_from_vector(spec, within_range(layout, method, M)(ca.sum2(active),
                                                                                *dispatch_args(layout, inputs)))
@@ -242,7 +270,8 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
             e = w_react * e_f + (1 - w_react) * ca.vertcat(ca.cos(psi_ilos), ca.sin(psi_ilos))
             psi_d = ca.atan2(e[1], e[0])
 
-    delta_c = pd_heading(psi[i], psi_d, Xi[S_["r"]], P["kp"], P["kd"], P["delta_max"])
+    r_own = _own_time(layout, vessel or layout.vessel(i), Xi[S_["r"]])
+    delta_c = pd_heading(psi[i], psi_d, r_own, P["kp"], P["kd"], P["delta_max"])
     n_c = n_service  # the leg's propeller speed, unless the method in charge commands another
     if cmd is not None and spec.commands_speed:
         rpm = ca.fmin(ca.fmax(cmd[0].rpm, Pi["rpm_min"]), Pi["rpm_max"])  # dead slow ahead .. maximum rpm
@@ -321,8 +350,11 @@ def _encounter_row(layout: Layout, c: dict, x_next: list, i: int):
     xn = x_next[i]
     d_min, d_with = xn[S_["d_min"]], xn[S_["d_min_with"]]
     t_col, c_with = xn[S_["t_collision"]], xn[S_["collision_with"]]
-    agents = [(j, pos_n[j], present[j]) for j in range(N) if j != i]
-    agents += [(N + k, obs[0:2, k], ca.SX(1)) for k in range(S)]
+    ell = P["ships"][i]["length"]
+    agents = [(j, pos_n[j], present[j], pair_collision_distance(P["collision_distance"], ell,
+                                                                  P["ships"][j]["length"]))
+              for j in range(N) if j != i]
+    agents += [(N + k, obs[0:2, k], ca.SX(1), P["collision_distance"]) for k in range(S)]
     return meet(layout, P, pos_n[i], (d_min, d_with, t_col, c_with), present[i], running, t, agents,
                 P["ships"][i]["half_beam"])
 
@@ -344,26 +376,38 @@ def meet(layout: Layout, P: dict, pos, rows, counts, running, t, agents, half_be
         Whether the ship is present and the run still running (1/0).
     t : SX
         Time at the start of the step.
-    agents : list of (index, SX (2×1), SX)
-        Other ships and obstacles in agent order: index, position after the step, presence at its start.
+    agents : list of (index, SX (2×1), SX, SX)
+        Other ships and obstacles in agent order: index, position after the step, presence at its start and the
+        centre distance below which the two collide (for two ships ``collision_distance`` times their mean
+        length, :func:`~mmg_casadi.vessel.library.pair_collision_distance`; for an obstacle
+        ``collision_distance``).
     half_beam : SX
-        Half the ship's beam: the distance at which its side touches a wall.
+        Half the ship's own beam: the distance at which its side touches a wall (land: plus the step input
+        ``grounding_margin``).
+
+    Returns
+    -------
+    casadi.SX (4, 1)
+        ``d_min`` (L), ``d_min_with`` (agent index), ``t_collision`` (L/U, -1 for none yet) and ``collision_with``
+        (agent index, -1 for none) after the step.
     """
     d_min, d_with, t_col, c_with = rows
     dt = P["dt"]
-    for j, pj, pres_j in agents:
+    for j, pj, pres_j, reach in agents:
         dij = ca.norm_2(pos - pj)
         valid = ca.logic_and(ca.logic_and(counts, pres_j), running)
         closer = ca.logic_and(valid, dij < d_min)
         d_min = ca.if_else(closer, dij, d_min)
         d_with = ca.if_else(closer, j, d_with)
-        hit = ca.logic_and(ca.logic_and(valid, dij < P["collision_distance"]), t_col < 0)
+        hit = ca.logic_and(ca.logic_and(valid, dij < reach), t_col < 0)
         t_col = ca.if_else(hit, t + dt, t_col)
         c_with = ca.if_else(hit, j, c_with)
     wall = hazards.KINDS["wall"]
+    first_land = layout.n_walls - layout.n_land  # land edges are the last wall segments
     for k in range(layout.n_walls):  # touching a wall: the hull's side reaches it (no closest-approach row)
         d = wall.distance(pos, P["walls"][:, k])
-        hit = ca.logic_and(ca.logic_and(ca.logic_and(counts, running), d < half_beam), t_col < 0)
+        clearance = half_beam + P["grounding_margin"] if k >= first_land else half_beam  # grounding on land
+        hit = ca.logic_and(ca.logic_and(ca.logic_and(counts, running), d < clearance), t_col < 0)
         t_col = ca.if_else(hit, t + dt, t_col)
         c_with = ca.if_else(hit, layout.n_ships + layout.n_obstacles + k, c_with)
     return ca.vertcat(d_min, d_with, t_col, c_with)
@@ -438,6 +482,11 @@ def build_guidance(layout: Layout, *, sparse: bool = False) -> ca.Function:
         Closed-loop layout (ships, vessels, methods, obstacles, walls) of the scenario.
     sparse : bool, default False
         The guidance of the sparse step (exact layouts only).
+
+    Returns
+    -------
+    casadi.Function
+        ``guidance_<key>(x, p) -> delta_c``: the commanded rudder angle of every ship (1 x N, rad).
     """
     if sparse:
         _check_sparse(layout)

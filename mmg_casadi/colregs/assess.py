@@ -72,7 +72,13 @@ class PairAssessment:
     rules: dict | None = field(default=None, compare=False)
 
     def to_dict(self) -> dict:
-        """The assessment as a plain dict."""
+        """The assessment as a plain dict.
+
+        Returns
+        -------
+        dict
+            The dataclass fields by name (``dataclasses.asdict``).
+        """
         return asdict(self)
 
 
@@ -104,6 +110,12 @@ def assess_pair(t, pos_a, psi_a, pos_b, psi_b, *, r_safe, collision_distance, pr
         Whether each ship is still sailing (default: always).
     speed_a, speed_b : array (T,), optional
         Speeds (default: from the positions).
+
+    Returns
+    -------
+    PairAssessment
+        ``min_distance`` (L, ``inf`` if the ships are never both active), ``t_min`` (L/U), each ship's encounter
+        and compliance, ``t_enter`` (L/U or None) and the rule-by-rule ``rules``.
 
     Examples
     --------
@@ -158,6 +170,12 @@ def assess_obstacle(t, pos_a, obstacle_pos, radius, collision_distance, *, activ
         Collision distance between centres (L).
     active_a : array-like of bool (T,), optional
         Whether ship a is active at each time (default: always).
+
+    Returns
+    -------
+    PairAssessment
+        ``min_distance`` (L, ``inf`` if a is never active), ``t_min`` (L/U), encounters ``"static"``, ``compliant``
+        as above.
 
     Examples
     --------

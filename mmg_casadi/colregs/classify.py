@@ -180,6 +180,11 @@ class ColregProfile:
         relative headings from 67.5° to 292.5° are still all classified; the stern sector and tolerances are
         the laboratory's.
 
+        Returns
+        -------
+        ColregProfile
+            The profile ``"strict"``.
+
         Examples
         --------
         >>> p = ColregProfile.strict()
@@ -223,6 +228,11 @@ class ColregProfile:
         metres_per_length : float, default 230.0
             Metres per ship length L used to convert the scheme's ranges.
 
+        Returns
+        -------
+        ColregProfile
+            The profile ``"ntnu-2023"`` (ranges in L, angles in degrees, sectors in rad).
+
         Examples
         --------
         >>> p = ColregProfile.ntnu_2023()
@@ -248,6 +258,11 @@ def get_profile(profile=None) -> ColregProfile:
     ----------
     profile : str or ColregProfile or None, optional
         Profile name, a profile, or ``None`` for ``iitm-lab``.
+
+    Returns
+    -------
+    ColregProfile
+        The profile.
 
     Examples
     --------
@@ -287,6 +302,12 @@ def classify_encounter(own_pos, own_psi, other_pos, other_psi, profile: ColregPr
         Headings (rad, from x towards y).
     profile : ColregProfile
         Sector thresholds.
+
+    Returns
+    -------
+    str
+        ``"head-on"``, ``"crossing-give-way"``, ``"crossing-stand-on"``, ``"overtaking"``, ``"overtaken"`` or
+        ``"none"``.
 
     Examples
     --------

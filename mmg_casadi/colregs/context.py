@@ -111,6 +111,11 @@ class EncounterContext:
         ----------
         k : int or None
             Sample index.
+
+        Returns
+        -------
+        float or None
+            ``t[k]`` (L/U), or None.
         """
         return None if k is None else float(self.t[k])
 
@@ -132,6 +137,14 @@ def baselines(t, onset, run_start, pos, vel, pos_other, vel_other, t_lookback) -
         Velocities over the ground.
     t_lookback : float
         Look-back time (L/U).
+
+    Returns
+    -------
+    base : int
+        The own ship's baseline sample: the look-back sample if the own ship's velocity then gave a CPA smaller
+        by more than the tolerance, else the onset.
+    base_other : int
+        The other ship's baseline sample, by the same test.
 
     Examples
     --------
@@ -174,6 +187,11 @@ def encounter_context(t, own, other, geometry, risk, episode, run_start, end, pr
         Last sample of the aftermath (Rule 13).
     profile : ScoringProfile
         Thresholds.
+
+    Returns
+    -------
+    EncounterContext
+        The encounter's series, baselines, role, late and must-act samples and profile.
 
     Examples
     --------
@@ -228,6 +246,11 @@ def first_encounter(t, pos_own, psi_own, pos_other, psi_other, profile) -> Encou
         Headings (rad).
     profile : ScoringProfile
         Thresholds.
+
+    Returns
+    -------
+    EncounterContext or None
+        The context of the first risk episode, or None without one.
 
     Examples
     --------

@@ -65,6 +65,12 @@ def conflicts(duties) -> list[tuple[int, ...]]:
     duties : sequence of Duty
         All encounters of one ship.
 
+    Returns
+    -------
+    list of tuple of int
+        One tuple per duty, in the order of ``duties``: the indices of those other ships, sorted (empty without a
+        conflict).
+
     Examples
     --------
     Give way to ship 1 while standing on for ship 2 (overlapping), and a later, separate stand-on for ship 3:
@@ -91,6 +97,11 @@ def excused_samples(duties, index, n_samples) -> np.ndarray:
         The stand-on duty.
     n_samples : int
         Number of samples T.
+
+    Returns
+    -------
+    numpy.ndarray of bool (T,)
+        True at the excused samples.
 
     Examples
     --------

@@ -23,6 +23,11 @@ def wrap_to_pi(angle):
     angle : float or numpy.ndarray
         Angle(s) to wrap (rad).
 
+    Returns
+    -------
+    float or numpy.ndarray
+        The wrapped angle(s) (rad); a float for a scalar.
+
     Examples
     --------
     >>> round(wrap_to_pi(3 * math.pi / 2), 6), round(wrap_to_pi(-0.5), 6)

@@ -30,6 +30,11 @@ def ground_velocity(t, pos) -> np.ndarray:
     pos : array-like (T, ..., 2)
         Positions (L).
 
+    Returns
+    -------
+    numpy.ndarray (T, ..., 2)
+        Velocities (L per L/U).
+
     Examples
     --------
     >>> t = np.array([0.0, 1.0, 2.0])
@@ -89,6 +94,8 @@ def pair_geometry(pos_own, psi_own, pos_other, psi_other, vel_own, vel_other) ->
     Returns
     -------
     PairGeometry
+        ``range`` (L), ``beta``, ``alpha`` (rad), ``cpa`` (L) and ``tcpa`` (L/U), each of the inputs' shape
+        ``(...)``.
 
     Examples
     --------

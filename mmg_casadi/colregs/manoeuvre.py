@@ -94,6 +94,12 @@ def measure_manoeuvre(psi, speed, window, reference, speed_ref, speed_max, *, co
         A course change of at least ``course_threshold_deg`` or a speed change of at least ``speed_threshold``
         marks the action.
 
+    Returns
+    -------
+    Manoeuvre
+        Course change (degrees), relative speed decrease and increase at each sample of ``window``, and the first
+        sample of action (None without one).
+
     Examples
     --------
     A 25 % slowdown regained afterwards: a reduction, no increase; the action is the slowdown.
@@ -130,6 +136,12 @@ def course_line_crossings(pos_own, pos_other, psi_other, window) -> np.ndarray:
         Heading of the other ship (rad).
     window : array-like of int
         Consecutive samples to search.
+
+    Returns
+    -------
+    numpy.ndarray
+        Distance along the other ship's course line of each crossing (L, positive ahead of her), in time order;
+        empty without a crossing.
 
     Examples
     --------

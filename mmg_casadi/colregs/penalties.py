@@ -34,6 +34,11 @@ def ramp(x, lo, hi):
     lo, hi : float
         Ends of the ramp, ``lo ≤ hi``.
 
+    Returns
+    -------
+    numpy.ndarray
+        Values in [0, 1], the shape of ``x``.
+
     Examples
     --------
     >>> ramp(np.array([1.0, 2.0, 3.0, 5.0]), 2.0, 4.0).tolist(), float(ramp(2.0, 2.0, 2.0))
@@ -54,6 +59,11 @@ def passing_distance_score(cpa, profile):
         Closest point of approach (L).
     profile : ScoringProfile
         ``r_col``, ``r_nm``, ``r_min``, ``r_pref`` and ``gamma_col``, ``gamma_nm``, ``gamma_min``.
+
+    Returns
+    -------
+    numpy.ndarray
+        S_r in [0, 1], the shape of ``cpa``.
 
     Examples
     --------
@@ -81,6 +91,11 @@ def delay_penalty(r_late, r_man, r_cpa) -> float:
         Range at the start of the manoeuvre (``None``: no manoeuvre).
     r_cpa : float
         Actual CPA (L).
+
+    Returns
+    -------
+    float
+        P_delay in [0, 1]: 1 for no manoeuvre, 0 for one begun before ample time ended.
 
     Examples
     --------
@@ -110,6 +125,11 @@ def non_apparent_penalty(course_change_deg, speed_reduction, profile) -> float:
     profile : ScoringProfile
         ``course_apparent_deg``, ``speed_apparent``, ``w_na_course``, ``w_na_speed``, ``na_cut``.
 
+    Returns
+    -------
+    float
+        P_na: 0 when either change is below ``na_cut``, else the weighted sum of the course and speed terms.
+
     Examples
     --------
     Laboratory profile (apparent 10°, 50 %): a 5° alteration at full speed gives
@@ -133,6 +153,11 @@ def port_to_port_score(alpha, beta):
     ----------
     alpha, beta : float or array-like
         Contact angle and bearing at the CPA (rad, positive to starboard).
+
+    Returns
+    -------
+    numpy.ndarray
+        Score in [0, 1], the broadcast shape of ``alpha`` and ``beta``.
 
     Examples
     --------

@@ -212,6 +212,11 @@ def iitm_lab() -> ScoringProfile:
       mile, where close quarters begins for ships in sight (Cockcroft & Lameijer p. 52), at the KCS's 230 m;
     * weights: Hagen 2023 and AIS_processing (module docstring).
 
+    Returns
+    -------
+    ScoringProfile
+        The profile ``"iitm-lab"`` (lengths in L, times in L/U, angles in degrees).
+
     Examples
     --------
     >>> p = iitm_lab()
@@ -260,6 +265,11 @@ def ntnu_2023(metres_per_length: float = 50.0) -> ScoringProfile:
     metres_per_length : float, default 50.0
         Metres per ship length L used to convert the scheme's ranges.
 
+    Returns
+    -------
+    ScoringProfile
+        The profile ``"ntnu-2023"`` (lengths in L, angles in degrees).
+
     Examples
     --------
     >>> p = ntnu_2023()
@@ -290,6 +300,11 @@ def scoring_profile(profile=None) -> ScoringProfile:
     ----------
     profile : str or ScoringProfile or None, optional
         Profile name, a profile, or ``None`` for ``iitm-lab``.
+
+    Returns
+    -------
+    ScoringProfile
+        The profile.
 
     Examples
     --------

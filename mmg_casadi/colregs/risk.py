@@ -35,6 +35,11 @@ def risk_of_collision(cpa, tcpa, rng, both, profile) -> np.ndarray:
     profile : ScoringProfile
         ``d_risk``, ``t_risk`` and ``r_risk``.
 
+    Returns
+    -------
+    numpy.ndarray of bool
+        The gate at every sample, the broadcast shape of the inputs.
+
     Examples
     --------
     >>> from mmg_casadi.colregs.profiles import iitm_lab
@@ -54,6 +59,11 @@ def release_range(profile) -> float:
     ----------
     profile : ScoringProfile
         ``r_risk`` and ``d_risk``.
+
+    Returns
+    -------
+    float
+        The release range (L).
 
     Examples
     --------
@@ -102,6 +112,11 @@ def risk_episodes(rng, tcpa, risk, both, clear_range) -> list[RiskEpisode]:
     clear_range : float
         The encounter is released only beyond this range (L; :func:`release_range`).
 
+    Returns
+    -------
+    list of RiskEpisode
+        The episodes in time order, each with its ``onset``, ``cpa`` and ``release`` samples; empty without risk.
+
     Examples
     --------
     Closing at unit speed to a CPA of 1 L at sample 6, then opening; risk at samples 2–5; released beyond 3.5 L:
@@ -146,6 +161,11 @@ def first_trigger(risk, tcpa, rng, start, stop, tcpa_limit=None, range_limit=Non
         Sample window (inclusive).
     tcpa_limit, range_limit : float or None, optional
         Thresholds; ``None`` switches one off (both off: no trigger).
+
+    Returns
+    -------
+    int or None
+        The sample index, or None if no sample in the window triggers.
 
     Examples
     --------

@@ -51,6 +51,7 @@ def classify_roles(beta, alpha, psi_own, psi_other, speed_own, speed_other, prof
     Returns
     -------
     numpy.ndarray of str
+        A name of :data:`ROLES` per element, the shape of the inputs.
 
     Examples
     --------

@@ -48,6 +48,14 @@ def cpa_tcpa(rel_pos, rel_vel):
     rel_vel : array-like (..., 2)
         Other minus own velocity (L per unit time).
 
+    Returns
+    -------
+    cpa : numpy.ndarray (...)
+        Closest point of approach (L).
+    tcpa : numpy.ndarray (...)
+        Time to it (in the time unit of ``rel_vel``, L/U for velocities in U); negative when opening, ``inf``
+        without relative motion.
+
     Examples
     --------
     >>> cpa, tcpa = cpa_tcpa(np.array([[10.0, 0.0], [10.0, 1.0]]), np.array([[-2.0, 0.0], [-2.0, 0.0]]))
@@ -88,7 +96,10 @@ def stand_on_should_act(cpa, tcpa, distance, *, collision_distance, profile: Col
 
     Returns
     -------
-    may_act, must_act : bool or array of bool
+    may_act : bool or numpy.ndarray of bool
+        Rule 17(a)(ii): the stand-on ship may take action alone (a bool for scalar inputs).
+    must_act : bool or numpy.ndarray of bool
+        Rule 17(b): she must take action (a bool for scalar inputs).
 
     Examples
     --------
@@ -157,7 +168,13 @@ class SideScore:
     compliant_all: bool | None
 
     def to_dict(self) -> dict:
-        """JSON-ready dict: encounter, compliant_all, quantities and one entry per rule (NaN/inf → None)."""
+        """JSON-ready dict: encounter, compliant_all, quantities and one entry per rule (NaN/inf → None).
+
+        Returns
+        -------
+        dict
+            ``encounter``, ``compliant_all``, ``quantities`` and per rule of :data:`RULES` ``{"verdict", ...details}``.
+        """
         out = {"encounter": self.encounter, "compliant_all": self.compliant_all,
                "quantities": _clean(self.quantities)}
         for rule in RULES:
@@ -190,7 +207,13 @@ class PairScore:
     b: SideScore
 
     def to_dict(self) -> dict:
-        """``{"profile", "a", "b"}`` with each side's :meth:`SideScore.to_dict`."""
+        """``{"profile", "a", "b"}`` with each side's :meth:`SideScore.to_dict`.
+
+        Returns
+        -------
+        dict
+            ``profile`` (its name) and ``a``, ``b`` (each side's dict).
+        """
         return {"profile": self.profile, "a": self.a.to_dict(), "b": self.b.to_dict()}
 
 

@@ -101,7 +101,15 @@ class Encounter:
 
     def to_dict(self) -> dict:
         """JSON-ready dict for ``metrics.json``: identity, applicable, onset, type, role, per-rule verdict/score
-        (``None`` for a rule that does not apply), total score, compliance and the quantities."""
+        (``None`` for a rule that does not apply), total score, compliance and the quantities.
+
+        Returns
+        -------
+        dict
+            Keys ``own``, ``other``, ``profile``, ``applicable``, ``encounter``, ``role``, ``onset``, ``release``,
+            ``closest``, ``score``, ``compliant``, ``conflicting_duties``, ``conflicts_with``, ``rules`` and
+            ``quantities``; NaN and infinities as None.
+        """
         return json_value({
             "own": self.own_name, "other": self.other_name, "profile": self.profile, "applicable": self.applicable,
             "encounter": self.encounter, "role": self.role, "onset": self.onset, "release": self.release,

@@ -46,6 +46,11 @@ def moving_reference(span, excused) -> np.ndarray:
     excused : array-like of bool
         Whether each sample of ``span`` is excused.
 
+    Returns
+    -------
+    numpy.ndarray of int
+        One reference sample per sample of ``span``.
+
     Examples
     --------
     >>> moving_reference(np.arange(10, 16), np.array([0, 0, 1, 1, 0, 0], bool)).tolist()

@@ -23,6 +23,12 @@ def json_value(value):
     value : object
         A number, bool, string, ``None``, or a dict/list/tuple of them.
 
+    Returns
+    -------
+    object
+        The converted value: dicts with str keys, lists for lists, tuples and arrays, Python numbers, None for
+        NaN and infinities.
+
     Examples
     --------
     >>> json_value({"a": np.float64(2.5), "b": np.inf, "c": (np.bool_(True), 1)})
@@ -69,5 +75,11 @@ class RuleResult:
         object.__setattr__(self, "score", float(min(1.0, max(0.0, self.score))))
 
     def to_dict(self) -> dict:
-        """``{"verdict", "score", **terms}``, JSON-ready."""
+        """``{"verdict", "score", **terms}``, JSON-ready.
+
+        Returns
+        -------
+        dict
+            ``verdict``, ``score`` and the rule's terms, JSON-ready.
+        """
         return {"verdict": self.verdict, "score": self.score, **json_value(self.terms)}

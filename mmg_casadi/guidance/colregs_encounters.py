@@ -200,6 +200,11 @@ def slots_of(memory: dict) -> list:
     ----------
     memory : dict
         The method's memory rows by name (:data:`MEMORY`).
+
+    Returns
+    -------
+    list of tuple
+        One ``(x, y, code)`` triple of memory entries per slot, ``SLOTS`` of them in slot order.
     """
     return [(memory[f"cv_slot{k}_x"], memory[f"cv_slot{k}_y"], memory[f"cv_slot{k}_code"]) for k in range(SLOTS)]
 

@@ -22,7 +22,8 @@ The own ship's *planned course* is the bearing of its next waypoint at its curre
   heading closest to a readily apparent alteration (``dpsi_min``) to starboard of her course whose straight-line
   passing distance to every ship is at least ``d_risk`` (the linear velocity obstacle of Huang et al. 2018,
   Ocean Eng. 151, with that combined radius), and for a ship crossing from port forward of the beam a speed
-  reduction by ``speed_cut`` (commanded propeller speed, followed through the engine model). **17(c)**: the
+  reduction by ``speed_cut`` (commanded propeller speed, followed through the engine model; the engine keeps
+  at least dead slow ahead). **17(c)**: the
   preferred heading is to starboard and the Rule 8 step below keeps the alteration to starboard unless the
   velocity obstacle leaves only a port turn of more than ``dpsi_min``. **17(b)**: the close-quarters filter and
   the guard below remain the last resort (within ``r_cq`` the filter may begin the action before the TCPA cue).
@@ -38,6 +39,12 @@ The own ship's *planned course* is the bearing of its next waypoint at its curre
   bearing without memory) — always to starboard for head-on and crossing duties (Rules 14, 15), otherwise unless
   the field already turns further to port (an overtaking ship may pass on either side). Static obstacles and the
   guard below are added after this step, so they keep their full say.
+- **Speed** (Rule 8(e)): besides the stand-on ship's cut (``speed_cut``), a give-way ship whose alteration alone
+  still leads into close quarters (the escalation above) can slacken speed (``speed_giveway``), and any ship in
+  extremis, when no heading the close-quarters filter below may turn through avoids the cones at her present
+  speed but one does at the reduced speed, can take the way off (``speed_extremis``, 17(b)). Both are off by
+  default: measured in environment 5 they lost runs and gained none, as a KCS slowed through its engine turns
+  away later in time (numbers in the parameter table). The propeller speed follows the engine model.
 - **Static obstacles** get the vortex only while the range closes (once it opens the ship is past it; without
   this a far goal's weak sink lets the vortex hold the ship in an orbit about the obstacle).
 - **Near the goal** (the paper's second failure mechanism): while anything is being avoided, the sink's strength
@@ -56,6 +63,10 @@ The own ship's *planned course* is the bearing of its next waypoint at its curre
   (``dpsi_min``, Rule 8) (the least-penetrating candidate if none is admissible). Terms of several neighbours,
   or of a neighbour and the rules, can cancel or point into a third ship; this filter is what keeps their sum
   out of the way of whatever is close.
+- **Land** (layouts with walls or land only): the close-quarters filter and the stand-on action also treat a
+  heading whose straight path at the present speed reaches a wall or land edge within ``vo_land_horizon`` as
+  inadmissible (:func:`~mmg_casadi.guidance.velocity_obstacle.land_blocked`), so the side the ship turns to is
+  one with water; the filter then applies while the method is in charge, whether or not a ship is close.
 
 Everything is branch-free CasADi (0/1 products and ``if_else``); the memory is
 :data:`~mmg_casadi.guidance.colregs_encounters.MEMORY` (:func:`colregs_vortex_command`). The exact switches are
@@ -150,6 +161,15 @@ class ColregsVortexParams:
         Fraction of the service propeller speed a stand-on ship takes off while she acts alone for a ship
         crossing from port forward of her beam ([0, 1)); 0.5 as Hagen et al. 2023's readily apparent speed
         reduction.
+    speed_giveway : float
+        Fraction of the service propeller speed a give-way ship takes off while her alteration alone still leads
+        into close quarters (passing distance below ``d_cpa_act`` at a TCPA below ``t_act``), Rule 8(e) ([0, 1));
+        0, off: in environment 5 a 0.5 cut lost runs and gained none (the parameter table gives the numbers).
+    speed_extremis : float
+        Fraction of the service propeller speed taken off in extremis, while no heading the ship turns through
+        next avoids the collision cones within ``r_cq`` at her present speed but one does at the reduced speed
+        ([0, 1]; 1 takes all the way off the engine allows, dead slow ahead), Rules 17(b) and 8(e); 0, off, for
+        the same reason.
     """
 
     theta_head_on: float = param_field("cv_theta_head_on_deg", math.pi / 180.0)
@@ -169,12 +189,19 @@ class ColregsVortexParams:
     d_cq: float = param_field("cv_d_cq")
     dpsi_cq: float = param_field("cv_dpsi_cq_deg", math.pi / 180.0)
     speed_cut: float = param_field("cv_speed_cut")
+    speed_giveway: float = param_field("cv_speed_giveway")
+    speed_extremis: float = param_field("cv_speed_extremis")
 
     def __post_init__(self):
         check_fields(self)
 
     def as_dict(self) -> dict:
         """The thresholds as keyword arguments of :func:`colregs_vortex`.
+
+        Returns
+        -------
+        dict
+            Field name to value, for every field of the dataclass.
 
         Examples
         --------
@@ -213,7 +240,7 @@ def _is(code, role):
 def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_vor0, r_safe, r_tol, gamma_max,
                          theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear,
                          v_ship_min, r_guard, lam_guard, d_risk=PARAMETERS["cv_d_risk"].default, speed_cut=None,
-                         d_att_floor=None, r_cq=None, d_cq=None,
+                         speed_giveway=None, speed_extremis=None, d_att_floor=None, r_cq=None, d_cq=None,
                          dpsi_cq=None, code=None, reference=None):
     """Per-neighbour quantities of :func:`colregs_vortex` (each a 1×M row unless stated).
 
@@ -225,7 +252,8 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     ``weight`` (strength of the escape term), ``escape`` (2×M unit escape directions), ``k_vor`` (vortex
     strength), ``threat`` (1 where the Rule 8 minimum alteration applies), ``slow`` (1 where the stand-on action
     includes the speed reduction), ``guard`` (radial push strength), ``avoid`` (1 where the neighbour is being
-    avoided). ``speed_cut``, ``d_att_floor``, ``r_cq``, ``d_cq`` and ``dpsi_cq`` are accepted so that
+    avoided), ``escalate`` (1 while a give-way ship's alteration alone still leads into close quarters). The
+    speed cuts, ``d_att_floor``, ``r_cq``, ``d_cq`` and ``dpsi_cq`` are accepted so that
     :meth:`ColregsVortexParams.as_dict` can be passed whole; only :func:`colregs_vortex` uses them.
 
     Parameters
@@ -252,7 +280,7 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
         The remaining COLREG thresholds of :class:`ColregsVortexParams`.
     d_risk : float, optional
         Passing distance below which a closing ship is a risk of collision (L; the table's ``cv_d_risk``).
-    speed_cut, d_att_floor, r_cq, d_cq, dpsi_cq : float, optional
+    speed_cut, speed_giveway, speed_extremis, d_att_floor, r_cq, d_cq, dpsi_cq : float, optional
         Ignored here (see above).
     code : array_like, optional
         Each neighbour's remembered encounter code (1×M, :mod:`mmg_casadi.guidance.colregs_encounters`: role, plus
@@ -360,15 +388,17 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     return {"beta": beta, "d": d, "ship": ship, "risk": risk, "role_now": role_now, "role": role,
             "stand_on": stand_on, "head_on": head_on, "crossing": crossing, "tcpa": tcpa, "dcpa": dcpa,
             "duty": duty, "holding": holding, "cue": cue, "acting": acting, "act_alone": act_alone, "act": act,
-            "weight": weight, "escape": escape, "k_vor": k_vor, "threat": threat, "slow": slow, "guard": guard,
-            "avoid": avoid}
+            "weight": weight, "escape": escape, "k_vor": k_vor, "threat": threat, "slow": slow,
+            "escalate": escalate, "guard": guard, "avoid": avoid}
 
 
 def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink, k_vor0, r_safe, r_tol,
            gamma_max, theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear, v_ship_min,
-           r_guard, lam_guard, d_att_floor, speed_cut, r_cq, d_cq, dpsi_cq, n_candidates, code, course, base,
-           d_risk=PARAMETERS["cv_d_risk"].default):
-    """Desired-heading vector, speed factor and terms of :func:`colregs_vortex` (``terms`` None without neighbours)."""
+           r_guard, lam_guard, d_att_floor, speed_cut, speed_giveway, speed_extremis, r_cq, d_cq, dpsi_cq,
+           n_candidates, code, course, base,
+           d_risk=PARAMETERS["cv_d_risk"].default, walls=None, clearance=None, horizon=None):
+    """Desired-heading vector, speed factor and terms of :func:`colregs_vortex` (``terms`` None without neighbours);
+    ``walls``, ``clearance``, ``horizon``: the land test of the stand-on action and the close-quarters filter."""
     own_pos, own_vel, goal = _col2(own_pos), _col2(own_vel), _col2(goal)
     nb_pos, nb_vel = _matrix(nb_pos, 2), _matrix(nb_vel, 2)
     m = nb_pos.size2()
@@ -398,9 +428,10 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
     alone = ca.sum2(active * t["act_alone"]) > 0
     psi_pref = (psi_goal if base is None else base) + dpsi_min
     speed_now = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
+    land = dict(walls=walls, clearance=clearance, horizon=horizon)  # headings that reach land are inadmissible
     psi_alone = velocity_obstacle(own_pos, speed_now, own_pos + ca.vertcat(ca.cos(psi_pref), ca.sin(psi_pref)),
                                   nb_pos, nb_vel, active * t["ship"], collision_distance=d_risk,
-                                  n_candidates=n_candidates, current_heading=own_psi)
+                                  n_candidates=n_candidates, current_heading=own_psi, **land)
     ships = ca.if_else(alone, ca.sqrt(ca.sumsqr(att)) * ca.vertcat(ca.cos(psi_alone), ca.sin(psi_alone)), ships)
     # Rule 17(a)(i): while a stand-on ship keeps her course and speed (and has no give-way duty to another ship),
     # the ship part of the field is the course kept
@@ -435,13 +466,24 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
     # the heading the ship turns through next: at most dpsi_cq from its own on the way to the field's
     psi_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_cq), dpsi_cq)
     speed = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
-    ok = heading_feasible(own_pos, speed, psi_next, nb_pos, nb_vel, close, collision_distance=d_cq)
+    ok = heading_feasible(own_pos, speed, psi_next, nb_pos, nb_vel, close, collision_distance=d_cq, **land)
     psi_pref = own_psi + dpsi_min  # a readily apparent alteration to starboard (Rule 8) is preferred
     e_pref = ca.vertcat(ca.cos(psi_pref), ca.sin(psi_pref))
     psi_vo = velocity_obstacle(own_pos, speed, own_pos + e_pref, nb_pos, nb_vel, close, collision_distance=d_cq,
-                               n_candidates=n_candidates, current_heading=own_psi)
+                               n_candidates=n_candidates, current_heading=own_psi, **land)
     psi_out = ca.if_else(ok, psi_f, psi_vo)
-    factor = 1 - speed_cut * (ca.sum2(active * t["slow"]) > 0)
+    # speed (Rule 8(e)): the stand-on ship's cut when she acts for a ship crossing from port, the give-way ship's
+    # when her alteration alone still leads into close quarters, and in extremis (17(b)) when no heading the ship
+    # turns through next at her present speed is outside the collision cones within r_cq (a course change alone
+    # cannot avoid them) but that heading is at the reduced speed (slowing helps: speed ∝ propeller speed)
+    psi_vo_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_vo - own_psi), -dpsi_cq), dpsi_cq)
+    slow_speed = ca.fmax(speed * (1 - speed_extremis), 1e-3)
+    no_turn = (1 - ok) * (1 - heading_feasible(own_pos, speed, psi_vo_next, nb_pos, nb_vel, close,
+                                               collision_distance=d_cq)) \
+        * heading_feasible(own_pos, slow_speed, psi_vo_next, nb_pos, nb_vel, close, collision_distance=d_cq)
+    cut = ca.fmax(speed_cut * (ca.sum2(active * t["slow"]) > 0),
+                  speed_giveway * (ca.sum2(active * t["escalate"]) > 0))
+    factor = 1 - ca.fmax(cut, speed_extremis * no_turn * (ca.sum2(close) > 0))
     return ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_out), ca.sin(psi_out)), factor, t
 
 
@@ -449,9 +491,12 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
                    gamma_max, theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear,
                    v_ship_min, r_guard, lam_guard, d_att_floor, d_risk=PARAMETERS["cv_d_risk"].default,
                    speed_cut=PARAMETERS["cv_speed_cut"].default,
+                   speed_giveway=PARAMETERS["cv_speed_giveway"].default,
+                   speed_extremis=PARAMETERS["cv_speed_extremis"].default,
                    r_cq=0.0, d_cq=PARAMETERS["cv_d_cq"].default,
                    dpsi_cq=PARAMETERS["cv_dpsi_cq_deg"].default * math.pi / 180.0,
-                   n_candidates=PARAMETERS["vo_candidates"].default, code=None, course=None, base=None):
+                   n_candidates=PARAMETERS["vo_candidates"].default, code=None, course=None, base=None, walls=None,
+                   clearance=None, horizon=None):
     """Desired-heading vector of ``colregs-vortex`` (2×1; its direction is the desired heading).
 
     Sink at the goal (strength capped while avoiding), the modified vortex at every ship the own ship gives way to,
@@ -495,6 +540,11 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
     speed_cut : float
         Fraction of the propeller speed a stand-on ship takes off while she acts for a ship crossing from port
         (the speed factor is returned by :func:`colregs_vortex_command` only).
+    speed_giveway : float
+        Fraction taken off while a give-way ship's alteration alone still leads into close quarters (Rule 8(e)).
+    speed_extremis : float
+        Fraction taken off in extremis, while no heading the close-quarters filter may turn through avoids the
+        cones at the present speed but one does at the reduced speed (Rule 17(b)); the largest cut applies.
     r_cq : float
         Close-quarters range of the heading filter (L, ≥ 0; 0, the default here, disables it).
     d_cq : float
@@ -511,6 +561,14 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
         The course a stand-on ship keeps (rad).
     base : float or casadi.SX, optional
         The heading at the onset of the open give-way duties (rad), from which Rule 8's alteration is measured.
+    walls : array_like, optional
+        Wall and land segments (4×W, L): the stand-on action and the close-quarters filter exclude headings whose
+        straight path reaches them (:func:`~mmg_casadi.guidance.velocity_obstacle.land_blocked`); None: no land
+        test.
+    clearance : float, optional
+        Distance that path keeps from the segments (L); needed with ``walls``.
+    horizon : float, optional
+        Time over which the path is followed (L/U); needed with ``walls``.
 
     Returns
     -------
@@ -534,8 +592,9 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
                   r_safe=r_safe, r_tol=r_tol, gamma_max=gamma_max, theta_head_on=theta_head_on, d_cpa_act=d_cpa_act,
                   t_act=t_act, r_act=r_act, t_close=t_close, k_standon=k_standon, dpsi_min=dpsi_min, d_clear=d_clear,
                   v_ship_min=v_ship_min, r_guard=r_guard, lam_guard=lam_guard, d_att_floor=d_att_floor,
-                  d_risk=d_risk, speed_cut=speed_cut, r_cq=r_cq, d_cq=d_cq, dpsi_cq=dpsi_cq, n_candidates=n_candidates, code=code,
-                  course=course, base=base)[0]
+                  d_risk=d_risk, speed_cut=speed_cut, speed_giveway=speed_giveway,
+                  speed_extremis=speed_extremis, r_cq=r_cq, d_cq=d_cq, dpsi_cq=dpsi_cq, n_candidates=n_candidates, code=code,
+                  course=course, base=base, walls=walls, clearance=clearance, horizon=horizon)[0]
 
 
 def colregs_vortex_command(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, memory, **kw):
@@ -555,7 +614,11 @@ def colregs_vortex_command(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, acti
     memory : dict
         The rows :data:`~mmg_casadi.guidance.colregs_encounters.MEMORY` at the start of the step, by name.
     **kw
-        The keyword arguments of :func:`colregs_vortex` other than ``code``, ``course`` and ``base``.
+        The keyword arguments of :func:`colregs_vortex` other than ``code``, ``course`` and ``base``, and
+        optionally ``walls``, ``clearance`` and ``horizon``: the land test of
+        :func:`~mmg_casadi.guidance.velocity_obstacle.land_blocked` (the closed loop passes them in layouts with
+        walls or land only), which makes the stand-on action and the close-quarters filter exclude headings whose
+        straight path reaches land.
 
     Returns
     -------
@@ -574,7 +637,8 @@ def colregs_vortex_command(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, acti
     course, base = memory["cv_course"], memory["cv_base"]
     # the role judged now (as colregs_vortex_terms judges it) for a ship that opens an encounter
     now = colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, code=None, reference=base,
-                               **{k: v for k, v in kw.items() if k not in ("lam_sink", "n_candidates")})
+                               **{k: v for k, v in kw.items()
+                                  if k not in ("lam_sink", "n_candidates", "walls", "clearance", "horizon")})
     link, code = recall(nb_pos, active, slots_of(memory))
     opened = active * now["risk"] * (code == 0)
     link, code = open_encounters(nb_pos, active * now["risk"], now["role_now"], link, code)

@@ -219,6 +219,11 @@ def sink(pos, centre, lam):
     lam : array_like or casadi.SX or casadi.MX
         Strength Λ, scalar or 1×K (L²/unit time).
 
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM (2, K)
+        Velocity induced at ``pos`` by each centre (L per unit time L/U).
+
     Examples
     --------
     >>> import casadi as ca
@@ -248,6 +253,11 @@ def vortex(pos, centre, k):
         Centre(s) of the vortex, 2×K (L).
     k : array_like or casadi.SX or casadi.MX
         Strength K, scalar or 1×K (L²/unit time).
+
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM (2, K)
+        Velocity induced at ``pos`` by each centre (L per unit time L/U).
 
     Examples
     --------
@@ -290,6 +300,11 @@ def inverse_square(own_pos, goal, nb_pos, nb_radius, active, *, k_att, k_rep, d0
     d0 : float
         Influence distance of an obstacle from its rim (L).
 
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM (2, 1)
+        −∇φ at ``own_pos``, the field velocity whose direction is the desired heading (L per unit time L/U).
+
     Examples
     --------
     >>> import casadi as ca
@@ -326,6 +341,11 @@ def sink_vortex(own_pos, goal, nb_pos, active, *, lam_sink, k_vor):
         Sink strength Λ at the goal (L²/unit time, < 0 attracts).
     k_vor : float
         Vortex strength K at every active neighbour (L²/unit time).
+
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM (2, 1)
+        Field velocity at ``own_pos`` (L per unit time L/U).
 
     Examples
     --------
@@ -378,6 +398,12 @@ def modified_vortex_terms(own_pos, own_psi, own_vel, nb_pos, nb_vel, *, k_vor0, 
         Largest relative bearing ``|γ|`` for which the vortex acts (rad).
     smooth : float or None, optional
         Sharpness of smooth surrogates of the switches; ``None`` for the exact ones.
+
+    Returns
+    -------
+    dict
+        ``gamma`` (rad), ``v_r``, ``v_theta`` (L per unit time L/U), ``d`` (L), ``on`` (0/1, or in (0, 1) when
+        smoothed), ``f`` (≥ 1, dimensionless) and ``k_vor`` (L²/unit time), each 1×M.
 
     Examples
     --------
@@ -447,6 +473,11 @@ def modified_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, 
     smooth : float or None, optional
         Sharpness of smooth surrogates of the switches; ``None`` for the exact ones.
 
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM (2, 1)
+        Field velocity at ``own_pos`` (L per unit time L/U).
+
     Examples
     --------
     >>> import casadi as ca
@@ -484,6 +515,11 @@ def channel_walls(pos, wall_a, wall_b, *, lam, d_act):
     d_act : float
         Perpendicular distance below which a wall acts (L).
 
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM (2, 1)
+        Sum of the acting walls' velocities at ``pos`` (L per unit time L/U; zero when none acts).
+
     Examples
     --------
     >>> import casadi as ca
@@ -510,6 +546,11 @@ def heading_of(vec):
     ----------
     vec : array_like or casadi.SX or casadi.MX
         2-vector (v_x, v_y), e.g. a field velocity.
+
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM
+        Heading of ``vec`` (rad, in [-π, π]).
 
     Examples
     --------

@@ -43,6 +43,11 @@ def circle_distance(pos, h):
         Ship position (L).
     h : SX or DM (3×1)
         The circle's column of the parameter vector.
+
+    Returns
+    -------
+    casadi.SX or casadi.DM
+        Centre distance (L; the radius is not subtracted).
     """
     return ca.norm_2(pos - h[0:2])
 
@@ -56,6 +61,11 @@ def segment_distance(pos, h):
         Ship position (L).
     h : SX or DM (4×1)
         The segment's column of the parameter vector.
+
+    Returns
+    -------
+    casadi.SX or casadi.DM
+        Distance to the nearest point of the segment (L).
     """
     a, b = h[0:2], h[2:4]
     ab = b - a

@@ -55,6 +55,11 @@ def heading_error(psi, psi_d):
     psi_d : float or casadi.SX or casadi.MX
         Desired heading ψ_d (rad).
 
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        ``e`` (rad, in (-π, π]).
+
     Examples
     --------
     >>> import math
@@ -81,6 +86,11 @@ def pd_heading(psi, psi_d, r, kp, kd, delta_max):
         Derivative gain K_d^c (≥ 0).
     delta_max : float
         Rudder-command saturation (rad).
+
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        Commanded rudder angle δ_c (rad, within ±``delta_max``).
 
     Examples
     --------

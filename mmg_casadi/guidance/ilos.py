@@ -78,6 +78,11 @@ def wrap_angle(a):
     a : float or casadi.SX or casadi.MX
         Angle to wrap (rad).
 
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        The angle in (-π, π] (rad).
+
     Examples
     --------
     >>> import math
@@ -97,6 +102,11 @@ def path_tangential_angle(wp_prev, wp_next):
         Start point (x, y) of the segment (L).
     wp_next : array_like or casadi.SX or casadi.MX
         End point (x, y) of the segment (L).
+
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        π_p (rad, in [-π, π]).
 
     Examples
     --------
@@ -121,6 +131,13 @@ def path_errors(pos, wp_prev, wp_next):
         Start point (x, y) of the segment (L).
     wp_next : array_like or casadi.SX or casadi.MX
         End point (x, y) of the segment (L).
+
+    Returns
+    -------
+    x_e : casadi.SX or casadi.MX or casadi.DM
+        Along-track distance from ``wp_prev`` (L).
+    y_e : casadi.SX or casadi.MX or casadi.DM
+        Cross-track error (L, > 0 to starboard of the path).
 
     Examples
     --------
@@ -152,6 +169,11 @@ def ilos_heading(pi_p, y_e, y_int, delta, k):
     k : float
         Integral ratio k (dimensionless, ≥ 0).
 
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        Desired heading ψ_d (rad, in (-π, π]).
+
     Examples
     --------
     >>> import math
@@ -176,6 +198,11 @@ def ilos_integrator_rate(y_e, y_int, delta, k):
         Look-ahead distance Δ (L, > 0).
     k : float
         Integral ratio k (dimensionless, ≥ 0).
+
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        ẏ_int (L).
 
     Examples
     --------
@@ -203,6 +230,13 @@ def select_segment(path, idx):
         2×K matrix of the start and waypoints (L).
     idx : float or casadi.SX or casadi.MX
         Float index of the tracked waypoint (1 ≤ idx ≤ K−1).
+
+    Returns
+    -------
+    wp_prev : casadi.SX or casadi.MX or casadi.DM (2, 1)
+        Start point of the segment (L).
+    wp_next : casadi.SX or casadi.MX or casadi.DM (2, 1)
+        End point of the segment, the tracked waypoint (L).
 
     Examples
     --------
@@ -237,6 +271,13 @@ def switch_waypoint(pos, path, idx, n, r_tol):
         Number of real columns of ``path`` (start + waypoints, ≥ 2).
     r_tol : float
         Waypoint acceptance radius R_tol (L).
+
+    Returns
+    -------
+    idx : casadi.SX or casadi.MX or casadi.DM
+        The new float index of the tracked waypoint.
+    reached_final : casadi.SX or casadi.MX or casadi.DM
+        1 if the final waypoint is within ``r_tol``, else 0.
 
     Examples
     --------
@@ -273,6 +314,11 @@ def ilos_step_terms(pos, path, idx, y_int, delta, k):
     k : float
         Integral ratio k (dimensionless, ≥ 0).
 
+    Returns
+    -------
+    dict
+        ``psi_d``, ``pi_p`` (rad), ``y_e``, ``x_e`` (L), ``y_int_dot`` (L) and ``wp_prev``, ``wp_next`` (2x1, L).
+
     Examples
     --------
     >>> t = ilos_step_terms([5.0, 1.0], [[0, 10], [0, 0]], 1.0, 0.0, 2.0, 0.05)
@@ -302,6 +348,11 @@ def validate_waypoints(points, field: str = "waypoints"):
         The start and the waypoints (x, y) (L).
     field : str, optional
         Name reported in the error if the path is invalid.
+
+    Returns
+    -------
+    tuple of (float, float)
+        The points as float pairs.
 
     Examples
     --------

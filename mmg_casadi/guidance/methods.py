@@ -65,6 +65,11 @@ class GuidanceInputs:
         The method's memory rows (:attr:`Method.memory`) at the start of the step, by name.
     service_rpm : SX, optional
         The ship's service propeller speed (rev/min), the speed it sails at when no method commands another.
+    walls : SX (4×W), optional
+        The layout's wall and land segments (L), given only when it has some (``None`` otherwise, so a method's
+        land test exists only in layouts with walls).
+    half_beam : SX, optional
+        Half the ship's beam (L), given with ``walls``.
     """
 
     pos: object
@@ -80,6 +85,8 @@ class GuidanceInputs:
     layout: object
     memory: dict = dataclasses.field(default_factory=dict)
     service_rpm: object = None
+    walls: object = None
+    half_beam: object = None
 
 
 @dataclass(frozen=True)
@@ -128,6 +135,9 @@ class Method:
         Names of the method's memory rows (state rows of each ship, rad; see :class:`Command`).
     commands_speed : bool
         The builder's :class:`Command` carries a propeller speed.
+    wall_inputs : tuple of str
+        Numeric step inputs the method reads only in layouts with walls or land (its land test); they enter the
+        compiled step only of such layouts.
     """
 
     name: str
@@ -138,9 +148,16 @@ class Method:
     goal_capture: bool = False
     memory: tuple[str, ...] = ()
     commands_speed: bool = False
+    wall_inputs: tuple[str, ...] = ()
 
     def command_size(self) -> int:
-        """Rows of the flat command vector (:func:`command_vector`): heading, rpm if any, memory rows."""
+        """Rows of the flat command vector (:func:`command_vector`): heading, rpm if any, memory rows.
+
+        Returns
+        -------
+        int
+            ``2 + commands_speed + len(memory)``.
+        """
         return 2 + int(self.commands_speed) + len(self.memory)
 
 
@@ -153,6 +170,11 @@ def command_vector(method: Method, command) -> ca.SX:
         The method whose builder made ``command``.
     command : Command
         The builder's output.
+
+    Returns
+    -------
+    casadi.SX
+        The column, :meth:`Method.command_size` rows.
     """
     parts = [command.heading]
     if method.commands_speed:
@@ -170,6 +192,11 @@ def command_from_vector(method: Method, v) -> Command:
         The method whose builder made the column.
     v : SX or MX
         The column (:meth:`Method.command_size` rows).
+
+    Returns
+    -------
+    Command
+        Desired-heading vector (rows 0-1), rpm (None unless the method commands speed) and the memory rows by name.
     """
     k = 2 + int(method.commands_speed)
     return Command(v[0:2], v[2] if method.commands_speed else None,
@@ -203,18 +230,43 @@ def _colregs_vortex(g: GuidanceInputs):
     heading, factor, memory = colregs_vortex.colregs_vortex_command(
         g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active, g.memory, lam_sink=P["lam_sink"],
         k_vor0=P["k_vor0"], r_safe=P["r_safe"], r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"],
-        n_candidates=g.layout.vo_candidates, **{k: P[f"cv_{k}"] for k in _CV_FIELDS})
+        n_candidates=g.layout.vo_candidates, **{k: P[f"cv_{k}"] for k in _CV_FIELDS}, **land_test(g))
     return Command(heading, factor * g.service_rpm, memory)
+
+
+LAND_INPUTS = ("vo_land_horizon", "vo_land_margin")
+"""The step inputs of the land test (:func:`land_test`), read only in layouts with walls or land."""
+
+
+def land_test(g: GuidanceInputs) -> dict:
+    """The keyword arguments of the velocity obstacle's land test for one ship's guidance inputs.
+
+    Parameters
+    ----------
+    g : GuidanceInputs
+        The ship's guidance inputs.
+
+    Returns
+    -------
+    dict
+        ``walls``, ``clearance`` (half the beam plus ``vo_land_margin``) and ``horizon`` (``vo_land_horizon``)
+        when the layout has walls or land; empty otherwise (no land test).
+    """
+    if g.walls is None or g.walls.size2() == 0:
+        return {}
+    return {"walls": g.walls, "clearance": g.half_beam + g.P["vo_land_margin"], "horizon": g.P["vo_land_horizon"]}
 
 
 def _velocity_obstacle(g: GuidanceInputs):
     D = g.P["collision_distance"]
+    land = land_test(g)
     psi_vo = velocity_obstacle.velocity_obstacle(
         g.pos, g.speed, g.goal, g.nb_pos, g.nb_vel, g.active, collision_distance=D,
-        n_candidates=g.layout.vo_candidates, cone=g.layout.vo_cone)
+        n_candidates=g.layout.vo_candidates, cone=g.layout.vo_cone, **land)
     if g.layout.vo_hold:
         psi_vo = velocity_obstacle.hold_heading(psi_vo, g.memory["held_heading"], g.pos, g.speed, g.nb_pos,
-                                                g.nb_vel, g.active, collision_distance=D, cone=g.layout.vo_cone)
+                                                g.nb_vel, g.active, collision_distance=D, cone=g.layout.vo_cone,
+                                                **land)
     vec = ca.vertcat(ca.cos(psi_vo), ca.sin(psi_vo))
     return Command(vec, memory={"held_heading": ca.atan2(vec[1], vec[0])})
 
@@ -235,14 +287,15 @@ def _velocity_obstacle_speed(g: GuidanceInputs):
     dead_slow = g.P["engine_dead_slow"] * load_vessel(vessel).ship.n_design_rpm
     levels = velocity_obstacle.speed_levels(g.service_rpm, dead_slow, _rpm_per_speed(vessel), lay.vo_speed_levels)
     D = g.P["collision_distance"]
+    land = land_test(g)
     psi, rpm, _ = velocity_obstacle.velocity_obstacle_speed(
         g.pos, g.goal, g.nb_pos, g.nb_vel, g.active, levels=levels, collision_distance=D,
-        n_candidates=lay.vo_candidates, speed_weight=g.P["vo_speed_weight"], cone=lay.vo_cone)
+        n_candidates=lay.vo_candidates, speed_weight=g.P["vo_speed_weight"], cone=lay.vo_cone, **land)
     if lay.vo_hold:  # keep the remembered heading, at the service speed, while it stays clear at that speed
         m = g.nb_pos.size2()
         hold = (ca.sum2(g.active) > 0 if m else 0) * velocity_obstacle.heading_feasible(
             g.pos, levels[0][1], g.memory["held_heading"], g.nb_pos, g.nb_vel, g.active, collision_distance=D,
-            cone=lay.vo_cone)
+            cone=lay.vo_cone, **land)
         psi = ca.if_else(hold, g.memory["held_heading"], psi)
         rpm = ca.if_else(hold, levels[0][0], rpm)
     vec = ca.vertcat(ca.cos(psi), ca.sin(psi))
@@ -256,17 +309,18 @@ METHODS: dict[str, Method] = {m.name: m for m in (
            "paper §4.3, eqs. (modified_vortex)–(factor_f)"),
     Method("velocity-obstacle", _velocity_obstacle, ("velocity-obstacle",),
            "Huang et al. 2018 (Ocean Eng. 151), the paper's baseline: headings at constant speed",
-           memory=("held_heading",)),
+           memory=("held_heading",), wall_inputs=LAND_INPUTS),
     Method("velocity-obstacle-speed", _velocity_obstacle_speed, ("velocity-obstacle",),
            "Huang et al. 2018 (Ocean Eng. 151) with speed changes: the heading search at each of vo_speed_levels "
            "steady speeds, the admissible velocity closest to the preferred one (plus vo_speed_weight per unit of "
            "slowing); the paper's baseline keeps its speed",
-           inputs=("vo_speed_weight", "engine_dead_slow"), memory=("held_heading",), commands_speed=True),
+           inputs=("vo_speed_weight", "engine_dead_slow"), memory=("held_heading",), commands_speed=True,
+           wall_inputs=LAND_INPUTS),
     Method("none", None, (), "ILOS waypoint tracking only (a ship that holds its course)"),
     Method("colregs-vortex", _colregs_vortex, ("sink-vortex", "modified-vortex", "colregs-vortex"),
            "ours: the modified vortex with COLREG Rules 8, 13 and 17 (mmg_casadi.guidance.colregs_vortex)",
            inputs=tuple(f"cv_{k}" for k in _CV_FIELDS), goal_capture=True, memory=colregs_vortex.MEMORY,
-           commands_speed=True),
+           commands_speed=True, wall_inputs=LAND_INPUTS),
 )}
 """Every method, by name (:func:`register` adds one)."""
 
@@ -332,6 +386,11 @@ def get(name, field: str = "method") -> Method:
     field : str, default 'method'
         Name of the input field, used in the error message.
 
+    Returns
+    -------
+    Method
+        The entry of :data:`METHODS`.
+
     Examples
     --------
     >>> get("none").builder is None
@@ -355,6 +414,11 @@ def parse_list(value, field: str = "methods") -> tuple[str, ...]:
         Method names, comma-separated or as an iterable.
     field : str, default 'methods'
         Name of the input field, used in the error message.
+
+    Returns
+    -------
+    tuple of str
+        The names in the order given, each once.
 
     Examples
     --------

@@ -30,6 +30,12 @@ the ship keeps a remembered heading while the velocity at that heading (at the c
 every active cone, and picks again (the goal-closest feasible candidate) when it becomes forbidden; while no
 neighbour is within R_safe the memory follows the ship's heading, so the choice starts afresh at the next
 encounter. Without ``hold`` the goal-closest feasible candidate is picked at every step.
+
+**Land** (``walls``, :func:`land_blocked`). With wall and land segments, a candidate whose straight path at the
+present speed over the horizon T (``vo_land_horizon``) comes within the clearance (half the beam plus
+``vo_land_margin``) of a segment is inadmissible too, and in the fallback it comes after every candidate clear of
+land (:data:`LAND_PENALTY`); the held heading is dropped when its path reaches land. The closed loop passes the
+segments only in layouts that have some, so without walls none of these expressions exists.
 """
 
 from __future__ import annotations
@@ -51,6 +57,9 @@ TIE_EPS = 1e-6
 """Weight (rad) of the tie-break term added to the goal cost."""
 _PEN_TOL = 1e-9
 _BIG = 1e9
+LAND_PENALTY = 2 * math.pi
+"""Added to the penetration (rad) of a candidate whose path reaches land: more than any cone's (at most π/2; −π without one),
+so the fallback takes the least-penetrating heading clear of land, and a heading towards land only when all are."""
 
 
 @dataclass(frozen=True)
@@ -96,8 +105,131 @@ def _half_angle(d, collision_distance, cone):
     return ca.fmin(ca.pi / 2, 2 * ca.atan(ratio))
 
 
+def _has_walls(walls):
+    """Whether ``walls`` holds at least one segment (None and 4×0 hold none)."""
+    return walls is not None and _matrix(walls, 4).size2() > 0
+
+
+def _path_blocked(own_pos, reach, clearance, wall, cos_u, sin_u):
+    """0/1 per direction u = (``cos_u``, ``sin_u``) (rows of numbers or expressions): 1 when the straight path
+    from ``own_pos`` of length ``reach`` along u comes within ``clearance`` of the segment ``wall`` = (ax, ay, bx,
+    by); for a ship already within ``clearance`` of it, when u heads closer to it (distance from a straight path
+    to a segment is convex along the path, so it then never gets closer).
+
+    Branch-free: the segment–segment distance is below r when the two cross properly or one of the four
+    endpoint-to-segment distances is below r (squared distances, no square roots)."""
+    ex, ey = wall[2] - wall[0], wall[3] - wall[1]
+    ee = ca.fmax(ex * ex + ey * ey, R_MIN ** 2)
+    ax, ay = wall[0] - own_pos[0], wall[1] - own_pos[1]  # a − p
+    bx, by = wall[2] - own_pos[0], wall[3] - own_pos[1]  # b − p
+    r2 = clearance * clearance
+    # gap g = p − c0 from the segment's point c0 nearest to the own position
+    t0 = ca.fmin(ca.fmax(-(ax * ex + ay * ey) / ee, 0), 1)
+    gx, gy = -ax - t0 * ex, -ay - t0 * ey
+    inside = gx * gx + gy * gy < r2
+    # path end q = p + reach u against the segment: q − a = reach u − (a − p)
+    qx, qy = reach * cos_u - ax, reach * sin_u - ay
+    tq = ca.fmin(ca.fmax((qx * ex + qy * ey) / ee, 0), 1)
+    near_q = (qx - tq * ex) ** 2 + (qy - tq * ey) ** 2 < r2
+    # segment endpoints against the path: s = clamp((a − p)·u, 0, reach), |a − p − s u|² = |a − p|² − 2 s (a − p)·u + s²
+    pa, pb = ax * cos_u + ay * sin_u, bx * cos_u + by * sin_u
+    sa, sb = ca.fmin(ca.fmax(pa, 0), reach), ca.fmin(ca.fmax(pb, 0), reach)
+    near_a = ax * ax + ay * ay - 2 * sa * pa + sa * sa < r2
+    near_b = bx * bx + by * by - 2 * sb * pb + sb * sb < r2
+    # proper crossing: a, b on opposite sides of the path's line and p, q on opposite sides of the segment's line
+    side_a, side_b = cos_u * ay - sin_u * ax, cos_u * by - sin_u * bx  # u × (a − p), u × (b − p)
+    k0 = ey * ax - ex * ay  # e × (p − a)
+    kq = k0 + reach * (ex * sin_u - ey * cos_u)  # e × (q − a) = e × (p − a) + reach e × u
+    crossing = (side_a * side_b < 0) * (k0 * kq < 0)
+    near = (crossing + near_q + near_a + near_b) > 0
+    approach = gx * cos_u + gy * sin_u < 0  # d/ds |p + s u − c0| < 0 at s = 0
+    return inside * approach + (1 - inside) * near
+
+
+def land_blocked(own_pos, own_speed, headings, walls, *, clearance, horizon):
+    """1 for each heading whose straight path at ``own_speed`` over ``horizon`` reaches land, else 0.
+
+    A heading ψ is blocked when the path ``own_pos + s (cos ψ, sin ψ)``, 0 ≤ s ≤ ``own_speed · horizon``, comes
+    within ``clearance`` of some segment of ``walls`` (channel walls and land edges; for a ship already within
+    ``clearance`` of a segment, when ψ heads closer to it). The velocity obstacle treats a blocked heading as
+    inadmissible (``walls`` of :func:`velocity_obstacle`).
+
+    Parameters
+    ----------
+    own_pos : array-like (2,) or casadi.SX
+        Own-ship position (L).
+    own_speed : float or casadi scalar
+        Own-ship speed (U).
+    headings : array-like (n,) or casadi scalar
+        Headings tested (rad).
+    walls : array-like (4, W) or casadi matrix
+        Segments (ax, ay, bx, by), one column each (L).
+    clearance : float or casadi scalar
+        Distance from a segment the path must keep (L): the ship's half beam plus ``vo_land_margin``.
+    horizon : float or casadi scalar
+        Time over which the path is followed (L/U; the table's ``vo_land_horizon``).
+
+    Returns
+    -------
+    casadi.DM or casadi.SX or casadi.MX
+        1×n row of 0/1 (a DM for numeric inputs).
+
+    Examples
+    --------
+    >>> shore = [[20.0], [-50.0], [20.0], [50.0]]  # a coast along x = 20 L
+    >>> land_blocked([0, 0], 1.0, [0.0, 0.5, 1.0, 1.5], shore, clearance=1.0, horizon=25.0)
+    DM([[1, 1, 0, 0]])
+    """
+    own_pos, walls = _col2(own_pos), _matrix(walls, 4)
+    if isinstance(headings, (ca.SX, ca.MX)):
+        cos_u, sin_u = ca.cos(ca.vec(headings).T), ca.sin(ca.vec(headings).T)
+    else:
+        h = np.asarray(headings, dtype=float).reshape(1, -1)
+        cos_u, sin_u = ca.DM(np.cos(h)), ca.DM(np.sin(h))
+    reach = own_speed * horizon  # path length (eq. land_reach)
+    hit = 0
+    for k in range(walls.size2()):
+        hit = hit + _path_blocked(own_pos, reach, clearance, walls[:, k], cos_u, sin_u)
+    return hit > 0
+
+
+@functools.lru_cache(maxsize=None)
+def _land_pass(n):
+    """One segment's step of the candidates' land test: ``(acc, wall, own_pos, reach, clearance) -> acc`` where
+    ``acc`` (n) counts the segments blocking each candidate; a segment farther than ``reach + clearance`` cannot
+    block any and is skipped (a conditional: its test is not evaluated, so the cost grows with the segments
+    near the ship only)."""
+    acc, wall, own, reach, r = ca.SX.sym("acc", n), ca.SX.sym("wall", 4), ca.SX.sym("own", 2), ca.SX.sym("L"), \
+        ca.SX.sym("r")
+    theta = -math.pi + 2 * math.pi * np.arange(n) / n
+    blocked = _path_blocked(own, reach, r, wall, ca.DM(np.cos(theta).reshape(1, -1)),
+                            ca.DM(np.sin(theta).reshape(1, -1)))
+    ins = [acc, wall, own, reach, r]
+    near = ca.Function(f"vo_land_near_n{n}", ins, [acc + blocked.T])
+    far = ca.Function(f"vo_land_far_n{n}", ins, [acc])
+    cond = ca.Function.conditional(f"vo_land_switch_n{n}", [near], far)
+    xm = [ca.MX.sym(f"x{i}", v.sparsity()) for i, v in enumerate(ins)]
+    a, b, p = xm[1][0:2], xm[1][2:4], xm[2]
+    ab = b - a
+    t = ca.fmin(ca.fmax(ca.dot(p - a, ab) / ca.fmax(ca.dot(ab, ab), R_MIN ** 2), 0), 1)
+    gap = p - a - t * ab
+    far_away = ca.sumsqr(gap) >= (xm[3] + xm[4]) ** 2  # index 1: the far branch
+    return ca.Function(f"vo_land_pass_n{n}", xm, [cond(far_away, *xm)])
+
+
+@functools.lru_cache(maxsize=None)
+def _land_function(n, w):
+    """Never-inlined ``(own_pos, reach, clearance, walls 4×w) -> blocked`` (n×1, 0/1) for the ``n`` candidates:
+    a loop (``mapaccum``) of :func:`_land_pass` over the segments."""
+    own, reach, r, walls = ca.MX.sym("own", 2), ca.MX.sym("L"), ca.MX.sym("r"), ca.MX.sym("walls", 4, w)
+    acc = _land_pass(n).mapaccum(w)(ca.DM.zeros(n, 1), walls, ca.repmat(own, 1, w), ca.repmat(reach, 1, w),
+                                    ca.repmat(r, 1, w))[:, -1]
+    return ca.Function(f"vo_land_n{n}_w{w}", [own, reach, r, walls], [acc > 0], {"never_inline": True})
+
+
 def velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance,
-                            n_candidates, cone=PARAMETERS["vo_cone"].default, current_heading=None):
+                            n_candidates, cone=PARAMETERS["vo_cone"].default, current_heading=None, walls=None,
+                            clearance=None, horizon=None):
     """Candidate headings and their feasibility, penetration and goal cost.
 
     Returns a dict: ``headings`` (1×n, θ_j), ``forbidden`` (M×n, 1 where neighbour i forbids candidate j),
@@ -127,6 +259,20 @@ def velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *,
         Cone formula, ``"huang"`` or ``"wide"`` (see :class:`VelocityObstacleParams`).
     current_heading : float or casadi.SX, optional
         Current heading (rad); near-ties go to the candidate closest to it (default: starboard of the goal direction).
+    walls : array-like (4, W) or casadi matrix, optional
+        Wall and land segments (ax, ay, bx, by), one column each (L): a candidate whose straight path reaches one
+        (:func:`land_blocked`) is infeasible and its penetration is raised by 2π, so the fallback prefers any
+        heading clear of land. None (or no column): no land test.
+    clearance : float or casadi scalar, optional
+        Distance the path keeps from the segments (L); needed with ``walls``.
+    horizon : float or casadi scalar, optional
+        Time over which the path is followed (L/U); needed with ``walls``.
+
+    Returns
+    -------
+    dict
+        ``headings``, ``forbidden``, ``feasible``, ``penetration`` (rad), ``cost`` (rad), ``half_angle`` (rad) and
+        ``goal_heading`` (rad), as described above; CasADi expressions.
 
     Examples
     --------
@@ -138,15 +284,19 @@ def velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, *,
     """
     _check_structure(n_candidates, cone)
     theta = -math.pi + 2 * math.pi * np.arange(int(n_candidates)) / int(n_candidates)
+    blocked = None
+    if _has_walls(walls):
+        blocked = land_blocked(own_pos, own_speed, theta, walls, clearance=clearance, horizon=horizon)
     return _candidate_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance, cone,
                             ca.DM(theta.reshape(1, -1)), ca.DM(np.vstack([np.cos(theta), np.sin(theta)])),
-                            current_heading)
+                            current_heading, blocked)
 
 
 def _candidate_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance, cone, headings,
-                     directions, current_heading=None):
+                     directions, current_heading=None, blocked=None):
     """:func:`velocity_obstacle_terms` for the candidate headings ``headings`` (1×n) with unit directions
-    ``directions`` (2×n): numbers (all candidates unrolled) or symbols (one candidate of a mapped loop)."""
+    ``directions`` (2×n): numbers (all candidates unrolled) or symbols (one candidate of a mapped loop);
+    ``blocked`` (1×n, 0/1) marks the candidates whose path reaches land (None: no land test)."""
     own_pos, goal, nb_pos, nb_vel = _col2(own_pos), _col2(goal), _matrix(nb_pos, 2), _matrix(nb_vel, 2)
     m, n = nb_pos.size2(), headings.size2()
     active = _row(active, m)
@@ -167,6 +317,9 @@ def _candidate_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, collision
     feasible = ca.DM.ones(1, n)
     for i in range(m):
         feasible = feasible * (1 - forbidden[i, :])
+    if blocked is not None:  # land: infeasible, and after every heading clear of land in the fallback
+        feasible = feasible * (1 - blocked)
+        penetration = penetration + LAND_PENALTY * blocked
     goal_heading = ca.atan2(goal[1] - own_pos[1], goal[0] - own_pos[0])
     off_goal = wrap_angle(headings - goal_heading)
     if current_heading is None:
@@ -185,7 +338,8 @@ def _candidate_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active, collision
 
 
 def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance, n_candidates,
-                      cone=PARAMETERS["vo_cone"].default, current_heading=None):
+                      cone=PARAMETERS["vo_cone"].default, current_heading=None, walls=None, clearance=None,
+                      horizon=None):
     """Desired heading ψ_d (rad, (−π, π]) chosen by the constant-speed linear velocity obstacle.
 
     The feasible candidate with the smallest goal cost wins (strict <, so the first minimum in candidate order
@@ -223,6 +377,21 @@ def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, colli
         Cone formula, ``"huang"`` or ``"wide"`` (see :class:`VelocityObstacleParams`).
     current_heading : float or casadi.SX, optional
         Current heading (rad); near-ties go to the candidate closest to it (default: starboard of the goal direction).
+    walls : array-like (4, W) or casadi matrix, optional
+        Wall and land segments (ax, ay, bx, by), one column each (L): a candidate whose straight path at
+        ``own_speed`` over ``horizon`` comes within ``clearance`` of one (:func:`land_blocked`) is inadmissible,
+        and in the fallback it comes after every heading clear of land. None or no column: no land test (the
+        expressions of the land test do not exist, the Function is the one without walls).
+    clearance : float or casadi scalar, optional
+        Distance the path keeps from the segments (L; the closed loop passes half the beam plus
+        ``vo_land_margin``); needed with ``walls``.
+    horizon : float or casadi scalar, optional
+        Time over which the path is followed (L/U; ``vo_land_horizon``); needed with ``walls``.
+
+    Returns
+    -------
+    casadi.DM or casadi.SX or casadi.MX
+        Desired heading ψ_d (rad, in (−π, π]); a DM for numeric inputs.
 
     Examples
     --------
@@ -238,43 +407,66 @@ def velocity_obstacle(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, colli
     args = [own_pos, own_speed, goal, nb_pos, nb_vel, _row(active, m), collision_distance]
     if current_heading is not None:
         args.append(current_heading)
-    return _vo_function(m, n, cone, current_heading is not None)(*args)
+    if not _has_walls(walls):
+        return _vo_function(m, n, cone, current_heading is not None)(*args)
+    walls = _matrix(walls, 4)
+    blocked = _land_function(n, walls.size2())(own_pos, own_speed * horizon, clearance, walls)  # eq. land_reach
+    return _vo_function(m, n, cone, current_heading is not None, True)(*args, blocked)
 
 
 @functools.lru_cache(maxsize=None)
-def _vo_function(m, n, cone, with_heading):
+def _vo_function(m, n, cone, with_heading, with_land=False):
     """The velocity obstacle for ``m`` neighbours as a never-inlined Function: a closed loop of many ships calls
-    it once per ship but its code is generated (and compiled) only once."""
+    it once per ship but its code is generated (and compiled) only once. ``with_land`` adds a last input, the
+    candidates' land test (n×1, 0/1, :func:`_land_function`)."""
     X = ca.MX if m else ca.SX  # MX keeps the loop over the neighbours a loop
     own, speed, goal = X.sym("own", 2), X.sym("U"), X.sym("goal", 2)
     nb, nbv, act, dist = X.sym("nb", 2, m), X.sym("nbv", 2, m), X.sym("a", 1, m), X.sym("D")
     ins = [own, speed, goal, nb, nbv, act, dist] + ([X.sym("h")] if with_heading else [])
-    out = _velocity_obstacle_expr(own, speed, goal, nb, nbv, act, dist, n, cone, ins[7] if with_heading else None)
-    tag = f"vo_m{m}_n{n}_{cone}{'_h' if with_heading else ''}"
+    blocked = None
+    if with_land:
+        blocked = X.sym("land", n)
+        ins.append(blocked)
+    out = _velocity_obstacle_expr(own, speed, goal, nb, nbv, act, dist, n, cone, ins[7] if with_heading else None,
+                                  blocked)
+    tag = f"vo_m{m}_n{n}_{cone}{'_h' if with_heading else ''}{'_land' if with_land else ''}"
     return ca.Function(tag, ins, [out], {"never_inline": True})
 
 
 def _velocity_obstacle_expr(own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance, n, cone,
-                            current_heading):
+                            current_heading, blocked=None):
     """Expression of :func:`velocity_obstacle` (inputs already as CasADi matrices, ``n`` candidates).
 
     With neighbours it is generated as a loop (``mapaccum``) over them of :func:`_neighbour_pass` followed by
     :func:`_selection`: the same operations in the same order as unrolling them, in code whose size does not
-    grow with the number of neighbours."""
+    grow with the number of neighbours. ``blocked`` (n×1, 0/1; None without walls) adds the land test: a blocked
+    candidate counts as forbidden once more, and when nothing is left the direct implementation's fallback
+    decides (:data:`LAND_PENALTY`)."""
     m = nb_pos.size2()
-    if m == 0:
-        psi, _ = _selection_expr(None, goal, own_pos, n, current_heading)
-        return psi
-    acc = _neighbour_pass(n, cone).mapaccum(m)(
-        ca.DM.zeros(n + 1, 1), ca.vertcat(nb_pos, nb_vel, active), ca.repmat(own_pos, 1, m),
-        ca.repmat(own_speed, 1, m), ca.repmat(collision_distance, 1, m))[:, -1]
-    sel_args = [acc, goal, own_pos] + ([current_heading] if current_heading is not None else [])
-    psi, best_c = _selection(n, current_heading is not None)(*sel_args)
-    direct = (best_c >= _BIG / 2) + (acc[n] > 0)
     args = [own_pos, own_speed, goal, nb_pos, nb_vel, active, collision_distance]
     if current_heading is not None:
         args.append(current_heading)
-    psi_direct = _direct_function(m, n, cone, current_heading is not None)(ca.logic_not(direct), *args)
+    if m == 0:
+        if blocked is None:
+            psi, _ = _selection_expr(None, goal, own_pos, n, current_heading)
+            return psi
+        psi, best_c = _selection_expr([blocked[j] for j in range(n)], goal, own_pos, n, current_heading)
+        direct = best_c >= _BIG / 2
+        psi_direct = _direct_function(m, n, cone, current_heading is not None, True)(ca.logic_not(direct), *args,
+                                                                                     blocked.T)
+        return ca.if_else(direct, psi_direct, psi)
+    acc = _neighbour_pass(n, cone).mapaccum(m)(
+        ca.DM.zeros(n + 1, 1), ca.vertcat(nb_pos, nb_vel, active), ca.repmat(own_pos, 1, m),
+        ca.repmat(own_speed, 1, m), ca.repmat(collision_distance, 1, m))[:, -1]
+    sel_acc = acc if blocked is None else acc + ca.vertcat(blocked, 0)
+    sel_args = [sel_acc, goal, own_pos] + ([current_heading] if current_heading is not None else [])
+    psi, best_c = _selection(n, current_heading is not None)(*sel_args)
+    direct = (best_c >= _BIG / 2) + (acc[n] > 0)
+    if blocked is None:
+        psi_direct = _direct_function(m, n, cone, current_heading is not None)(ca.logic_not(direct), *args)
+    else:
+        psi_direct = _direct_function(m, n, cone, current_heading is not None, True)(ca.logic_not(direct), *args,
+                                                                                     blocked.T)
     return ca.if_else(direct, psi_direct, psi)
 
 
@@ -364,19 +556,25 @@ def _selection(n, with_heading):
 
 
 @functools.lru_cache(maxsize=None)
-def _direct_function(m, n, cone, with_heading):
+def _direct_function(m, n, cone, with_heading, with_land=False):
     """Never-inlined conditional: index 0 → the direct implementation, otherwise 0 (nothing evaluated).
 
     The direct implementation is generated as loops over the candidates (a ``map`` of one candidate's terms
     and a ``mapaccum`` of the selection), the same operations as :func:`_velocity_obstacle_reference` in the
-    same order, so its code stays small: it runs only in the rare fallback and degenerate cases."""
+    same order, so its code stays small: it runs only in the rare fallback and degenerate cases. ``with_land``
+    adds a last input, the candidates' land test (1×n, 0/1)."""
     own, speed, goal = ca.SX.sym("own", 2), ca.SX.sym("U"), ca.SX.sym("goal", 2)
     nb, nbv, act, dist = ca.SX.sym("nb", 2, m), ca.SX.sym("nbv", 2, m), ca.SX.sym("a", 1, m), ca.SX.sym("D")
     ins = [own, speed, goal, nb, nbv, act, dist] + ([ca.SX.sym("h")] if with_heading else [])
-    tag = f"vo_direct_m{m}_n{n}_{cone}{'_h' if with_heading else ''}"
+    tag = f"vo_direct_m{m}_n{n}_{cone}{'_h' if with_heading else ''}{'_land' if with_land else ''}"
     th, u = ca.SX.sym("theta"), ca.SX.sym("u", 2)
-    t = _candidate_terms(own, speed, goal, nb, nbv, act, dist, cone, th, u, ins[7] if with_heading else None)
-    one = ca.Function(tag + "_candidate", [th, u] + ins, [t["feasible"], t["cost"], t["penetration"]])
+    lead = [th, u]
+    blk = None
+    if with_land:
+        blk = ca.SX.sym("land")
+        lead.append(blk)
+    t = _candidate_terms(own, speed, goal, nb, nbv, act, dist, cone, th, u, ins[7] if with_heading else None, blk)
+    one = ca.Function(tag + "_candidate", lead + ins, [t["feasible"], t["cost"], t["penetration"]])
     state, inp = ca.SX.sym("best", 5), ca.SX.sym("cand", 4)
     best_c, best_th, fb_p, fb_c, fb_th = (state[k] for k in range(5))
     feasible, cost, pen, heading = (inp[k] for k in range(4))
@@ -387,28 +585,30 @@ def _direct_function(m, n, cone, with_heading):
         ca.if_else(fb_better, pen, fb_p), ca.if_else(fb_better, cost, fb_c), ca.if_else(fb_better, heading, fb_th))])
     theta = -math.pi + 2 * math.pi * np.arange(n) / n
     xm = [ca.MX.sym(f"x{i}", v.sparsity()) for i, v in enumerate(ins)]
+    extra = [ca.MX.sym("land", 1, n)] if with_land else []
     headings = ca.DM(theta.reshape(1, n))
-    feas, costs, pens = one.map(n)(headings, ca.DM(np.vstack([np.cos(theta), np.sin(theta)])), *xm)
+    feas, costs, pens = one.map(n)(headings, ca.DM(np.vstack([np.cos(theta), np.sin(theta)])), *extra, *xm)
     goal_heading = ca.atan2(xm[2][1] - xm[0][1], xm[2][0] - xm[0][0])
     init = ca.vertcat(_BIG, goal_heading, _BIG, _BIG, goal_heading)
     final = fold.mapaccum(n)(init, ca.vertcat(feas, costs, pens, headings))[:, -1]
     out = wrap_angle(ca.if_else(final[0] < _BIG / 2, final[1], final[4]))
-    full = ca.Function(tag + "_eval", xm, [out])
-    skip = ca.Function(tag + "_skip", xm, [ca.MX(0)])
+    full = ca.Function(tag + "_eval", xm + extra, [out])
+    skip = ca.Function(tag + "_skip", xm + extra, [ca.MX(0)])
     cond = ca.Function.conditional(tag + "_switch", [full], skip)
     xc = [ca.MX.sym(f"x{i}", *cond.size_in(i)) for i in range(cond.n_in())]
     return ca.Function(tag, xc, [cond(*xc)], {"never_inline": True})
 
 
 def _velocity_obstacle_reference(own_pos, own_speed, goal, nb_pos, nb_vel, active, *, collision_distance,
-                                 n_candidates, cone=PARAMETERS["vo_cone"].default, current_heading=None):
+                                 n_candidates, cone=PARAMETERS["vo_cone"].default, current_heading=None, walls=None,
+                                 clearance=None, horizon=None):
     """The direct implementation (every candidate against every neighbour, trigonometric tests).
 
     Used by :func:`velocity_obstacle` for the fallback and the degenerate cases; see it for the semantics.
     """
     t = velocity_obstacle_terms(own_pos, own_speed, goal, nb_pos, nb_vel, active,
                                 collision_distance=collision_distance, n_candidates=n_candidates, cone=cone,
-                                current_heading=current_heading)
+                                current_heading=current_heading, walls=walls, clearance=clearance, horizon=horizon)
     headings, feasible, cost, pen = t["headings"], t["feasible"], t["cost"], t["penetration"]
     best_c, best_th = _BIG, t["goal_heading"]
     fb_p, fb_c, fb_th = _BIG, _BIG, t["goal_heading"]
@@ -424,9 +624,10 @@ def _velocity_obstacle_reference(own_pos, own_speed, goal, nb_pos, nb_vel, activ
 
 
 def heading_feasible(own_pos, own_speed, heading, nb_pos, nb_vel, active, *, collision_distance,
-                     cone=PARAMETERS["vo_cone"].default):
+                     cone=PARAMETERS["vo_cone"].default, walls=None, clearance=None, horizon=None):
     """1 if the velocity ``own_speed`` (cos ψ, sin ψ) at ``heading`` ψ lies outside the cone of every active
-    neighbour, else 0 (same cone test as :func:`velocity_obstacle_terms`: angle(w, l) < α and w ≠ 0).
+    neighbour, else 0 (same cone test as :func:`velocity_obstacle_terms`: angle(w, l) < α and w ≠ 0); with
+    ``walls``, also 0 when its straight path reaches land (:func:`land_blocked`).
 
     Parameters
     ----------
@@ -446,6 +647,12 @@ def heading_feasible(own_pos, own_speed, heading, nb_pos, nb_vel, active, *, col
         Combined radius D of the cones (L).
     cone : {"huang", "wide"}
         Cone half-angle formula (see the module notes).
+    walls : array_like or casadi matrix, optional
+        Wall and land segments (4×W, L); None or no column: no land test.
+    clearance : float or casadi scalar, optional
+        Distance the path keeps from the segments (L); needed with ``walls``.
+    horizon : float or casadi scalar, optional
+        Time over which the path is followed (L/U); needed with ``walls``.
 
     Returns
     -------
@@ -474,11 +681,13 @@ def heading_feasible(own_pos, own_speed, heading, nb_pos, nb_vel, active, *, col
         angle = ca.atan2(ca.fabs(los[0] * w[1] - los[1] * w[0]), los[0] * w[0] + los[1] * w[1])
         forb = (active[i] > 0) * (ca.sumsqr(w) > 1e-12) * (angle < half)
         ok = ok * (1 - forb)
+    if _has_walls(walls):
+        ok = ok * (1 - land_blocked(own_pos, own_speed, heading, walls, clearance=clearance, horizon=horizon))
     return ok
 
 
 def hold_heading(fresh, held, own_pos, own_speed, nb_pos, nb_vel, active, *, collision_distance,
-                 cone=PARAMETERS["vo_cone"].default):
+                 cone=PARAMETERS["vo_cone"].default, walls=None, clearance=None, horizon=None):
     """The heading the ship steers with the paper's "keep the chosen velocity" behaviour.
 
     ``held`` (the remembered heading) while some neighbour is active and ``held`` is feasible
@@ -504,6 +713,8 @@ def hold_heading(fresh, held, own_pos, own_speed, nb_pos, nb_vel, active, *, col
         Combined radius D of the cones (L).
     cone : {"huang", "wide"}
         Cone half-angle formula (see the module notes).
+    walls, clearance, horizon : optional
+        The land test of :func:`heading_feasible`: ``held`` is also dropped when its path reaches land.
 
     Returns
     -------
@@ -526,7 +737,7 @@ def hold_heading(fresh, held, own_pos, own_speed, nb_pos, nb_vel, active, *, col
     act = _row(active, m)
     any_active = ca.sum2(act) > 0 if m else 0
     ok = heading_feasible(own_pos, own_speed, held, nb_pos, nb_vel, act, collision_distance=collision_distance,
-                          cone=cone)
+                          cone=cone, walls=walls, clearance=clearance, horizon=horizon)
     return ca.if_else(any_active * ok, held, fresh)
 
 
@@ -572,7 +783,8 @@ def speed_levels(service_rpm, dead_slow_rpm, rpm_per_speed, n_levels):
 
 
 def velocity_obstacle_speed(own_pos, goal, nb_pos, nb_vel, active, *, levels, collision_distance, n_candidates,
-                            speed_weight, cone=PARAMETERS["vo_cone"].default):
+                            speed_weight, cone=PARAMETERS["vo_cone"].default, walls=None, clearance=None,
+                            horizon=None):
     """Desired heading and propeller speed chosen by the linear velocity obstacle over headings and speed levels.
 
     The constant-speed search of :func:`velocity_obstacle` is run at the steady speed of every level of
@@ -614,11 +826,17 @@ def velocity_obstacle_speed(own_pos, goal, nb_pos, nb_vel, active, *, levels, co
         Extra cost of a speed reduction w (per unit of reduction, a fraction of the service speed; ≥ 0).
     cone : str, default 'huang'
         Cone formula, ``"huang"`` or ``"wide"`` (see :class:`VelocityObstacleParams`).
+    walls, clearance, horizon : optional
+        The land test of :func:`velocity_obstacle`, at each level's speed (a slower level's path is shorter).
 
     Returns
     -------
-    psi, rpm, level : casadi.DM, SX or MX
-        Desired heading (rad), propeller speed (rev/min) and the index of the chosen level.
+    psi : casadi.DM or casadi.SX or casadi.MX
+        Desired heading (rad).
+    rpm : casadi.DM or casadi.SX or casadi.MX
+        Desired propeller speed (rev/min), that of the chosen level.
+    level : casadi.DM or casadi.SX or casadi.MX
+        Index of the chosen level in ``levels``.
 
     Examples
     --------
@@ -645,10 +863,11 @@ def velocity_obstacle_speed(own_pos, goal, nb_pos, nb_vel, active, *, levels, co
     speed0 = levels[0][1]
     best_c, best_psi, best_rpm, best_k = _BIG, None, None, None
     for k, (rpm, speed) in enumerate(levels):
+        land = dict(walls=walls, clearance=clearance, horizon=horizon)
         psi = velocity_obstacle(own_pos, speed, goal, nb_pos, nb_vel, active, collision_distance=collision_distance,
-                                n_candidates=n_candidates, cone=cone)
+                                n_candidates=n_candidates, cone=cone, **land)
         ok = heading_feasible(own_pos, speed, psi, nb_pos, nb_vel, active, collision_distance=collision_distance,
-                              cone=cone)
+                              cone=cone, **land)
         gap = 2 * speed * speed0 * (1 - ca.cos(psi - goal_heading)) + (speed0 - speed) ** 2
         cost = ca.sqrt(gap) / speed0 + speed_weight * (speed0 - speed) / speed0
         if k == 0:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import socket
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -106,6 +107,11 @@ def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int =
         Steps per ``mapaccum`` chunk.
     disturbance : DisturbanceRanges or None, optional
         Ranges of the per-run disturbance (``None``: undisturbed).
+
+    Returns
+    -------
+    list of BatchTask
+        The batches, interleaved over the cells; empty when every run is done.
 
     Examples
     --------
@@ -204,6 +210,65 @@ RAY_MAX_RETRIES = 3
 """Times Ray reruns a batch whose worker process died (its rows are appended once: appends skip stored keys)."""
 RAY_LOST = ("WorkerCrashedError", "NodeDiedError", "OutOfMemoryError", "ObjectLostError", "LocalRayletDiedError")
 """``ray.exceptions`` that mean a batch was lost with its worker or node (not an error of the batch itself)."""
+RAY_PROBE_TIMEOUT = 3.0
+"""Seconds :func:`check_ray_address` waits for a Ray cluster's head to accept a connection."""
+RAY_LOCAL_ADDRESSES = ("auto", "local")
+"""Addresses ``ray.init`` resolves itself (a cluster running on this machine, a new local one): not probed."""
+
+
+def check_ray_address(address, field: str = "address") -> str | None:
+    """Refuse a Ray address that is malformed or that no cluster answers at, before any work.
+
+    ``ray.init`` with a wrong address waits minutes and only after the study has compiled its closed loops; this
+    opens (and closes) one TCP connection to ``host:port`` within :data:`RAY_PROBE_TIMEOUT` s instead.
+
+    Parameters
+    ----------
+    address : str or None
+        ``host:port`` of the head's GCS (``ray start --head`` prints it), ``ray://host:port`` (Ray Client),
+        ``[ipv6]:port``, one of :data:`RAY_LOCAL_ADDRESSES` (not probed), or None (a new local cluster).
+    field : str, default 'address'
+        Name of the input, for the error message.
+
+    Returns
+    -------
+    str or None
+        ``address``.
+
+    Raises
+    ------
+    InputError
+        The address does not parse or nothing accepts a connection there.
+
+    Examples
+    --------
+    >>> check_ray_address(None), check_ray_address("auto")
+    (None, 'auto')
+    >>> check_ray_address("127.0.0.1:1")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.InputError: address: expected the host:port of a running Ray cluster (... refused), got '127.0.0.1:1'
+    >>> check_ray_address("head")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.InputError: address: expected host:port, ray://host:port, auto or local, got 'head'
+    """
+    if address is None or address in RAY_LOCAL_ADDRESSES:
+        return address
+    forms = f"host:port, ray://host:port, {' or '.join(RAY_LOCAL_ADDRESSES)}"
+    if not isinstance(address, str):
+        raise InputError(field, forms, address)
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    host = host.removeprefix("[").removesuffix("]")
+    if not host or not port.isdigit() or not 1 <= int(port) <= 65535:
+        raise InputError(field, forms, address)
+    try:
+        socket.create_connection((host, int(port)), timeout=RAY_PROBE_TIMEOUT).close()
+    except (OSError, UnicodeError) as err:
+        reason = getattr(err, "strerror", None) or str(err) or type(err).__name__
+        raise InputError(field, f"the host:port of a running Ray cluster (ray start --head; connecting to "
+                         f"{host}:{port} within {RAY_PROBE_TIMEOUT:g} s failed: {reason})", address) from None
+    return address
 
 
 class LocalExecutor:
@@ -233,6 +298,13 @@ class LocalExecutor:
         ----------
         tasks : iterable of BatchTask
             The batches to run.
+
+        Yields
+        ------
+        task : BatchTask
+            A completed batch.
+        rows : list of dict
+            Its rows of ``runs.csv``, one per run.
         """
         tasks = list(tasks)
         if self.workers == 1 or len(tasks) <= 1:
@@ -334,6 +406,13 @@ class RayExecutor:
         ----------
         tasks : iterable of BatchTask
             The batches to run.
+
+        Yields
+        ------
+        task : BatchTask
+            A completed batch.
+        rows : list of dict
+            Its rows of ``runs.csv``, one per run.
         """
         import ray  # optional dependency (extra [ray]): imported where used
         tasks = list(tasks)

@@ -81,6 +81,11 @@ def write_csv(comparisons, path) -> Path:
         The comparisons.
     path : str or Path
         Destination.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -99,6 +104,12 @@ def read_csv(path) -> list[dict]:
     ----------
     path : str or Path
         The file.
+
+    Returns
+    -------
+    list of dict
+        One dict per row, keys :data:`COMPARISON_COLUMNS`; ``environment``, ``n``, ``a_only``, ``b_only`` as int,
+        the method names and ``verdict`` as str, the rest as float.
     """
     ints = {"environment", "n", "a_only", "b_only"}
     text = {"method_a", "method_b", "verdict"}
@@ -115,6 +126,11 @@ def to_markdown(comparisons) -> str:
     ----------
     comparisons : list of dict
         The comparisons.
+
+    Returns
+    -------
+    str
+        The table, one row per comparison, without a final newline.
 
     Examples
     --------

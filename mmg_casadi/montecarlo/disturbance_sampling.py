@@ -85,7 +85,13 @@ class DisturbanceRanges:
         return self.current is not None or self.wind is not None
 
     def to_dict(self) -> dict:
-        """``{"current": [low, high] or None, "wind": ...}`` as ``study.json`` and ``metrics.json`` record it."""
+        """``{"current": [low, high] or None, "wind": ...}`` as ``study.json`` and ``metrics.json`` record it.
+
+        Returns
+        -------
+        dict
+            ``"current"`` and ``"wind"``: ``[low, high]`` (U_des units) or None.
+        """
         return {k: None if v is None else list(v) for k, v in (("current", self.current), ("wind", self.wind))}
 
 
@@ -98,6 +104,12 @@ def sample_disturbance(environment: int, run: int, base_seed: int, ranges: Distu
         As for :func:`mmg_casadi.montecarlo.sampling.sample_scenario`.
     ranges : DisturbanceRanges
         Speed ranges; a quantity without a range is zero (speed and direction).
+
+    Returns
+    -------
+    dict
+        ``current_speed``, ``wind_speed`` (U_des units), ``current_direction_deg``, ``wind_direction_deg``
+        (degrees in [-180, 180)).
 
     Examples
     --------

@@ -78,6 +78,11 @@ def format_verdicts(encounters, ships=None) -> str:
     ships : sequence of int, optional
         Scenario index of each ship index used by the encounters (default: the same index).
 
+    Returns
+    -------
+    str
+        ``other:role:score:rule=0|1/...`` per encounter, joined by ``;`` (``""`` without any).
+
     Examples
     --------
     >>> from mmg_casadi.colregs.verdict import RuleResult
@@ -104,6 +109,11 @@ def parse_verdicts(text, field: str = "colregs_verdicts") -> list[Verdict]:
         The cell.
     field : str
         Name used in the error message.
+
+    Returns
+    -------
+    list of Verdict
+        One per encounter of the cell, in cell order.
 
     Examples
     --------
@@ -255,6 +265,11 @@ def write_csv(table, path, columns) -> Path:
         CSV file to write.
     columns : sequence of str
         :data:`ENCOUNTER_COLUMNS` or :data:`PAIR_COLUMNS`.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
     """
     path = Path(path)
     with open(path, "w", encoding="utf-8", newline="") as f:
@@ -281,6 +296,11 @@ def to_markdown(summary, comparisons) -> str:
         :func:`summarize_encounters`.
     comparisons : list of dict
         :func:`compare_encounters`.
+
+    Returns
+    -------
+    str
+        The tables, separated by blank lines, without a final newline.
 
     Examples
     --------

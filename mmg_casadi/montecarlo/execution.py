@@ -35,6 +35,10 @@ Outcome of a run (own ship = agent 0, judged from the final state):
     them it kept every applicable rule in, the mean of their graded scores (``nan`` without one), the run-level
     flag (every risky encounter kept; empty without one) and each encounter's role, score and rule verdicts
     (:func:`format_verdicts`); see :func:`own_ship_encounters`.
+``colregs_rule9``
+    the own ship's COLREG Rule 9(a) score in a narrow channel (:func:`mmg_casadi.colregs.narrow_channel.rule9`
+    on the same history): the share of her time in a narrow channel spent on the starboard side of its centre
+    line (kept from 0.9); ``nan`` when she was never in one (every environment without walls or land).
 
 Outcome, CE and MCTE are judged by :meth:`mmg_casadi.closed_loop.problem.ClosedLoopModel.outcomes`, as for a single
 scenario run (a diverged ship's CE/MCTE are ``nan``; summaries average them over successful runs only). Fleet
@@ -62,6 +66,7 @@ from mmg_casadi.closed_loop.simulation import (
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.closed_loop.problem import ClosedLoopModel, build_problem
+from mmg_casadi.colregs.narrow_channel import rule9
 from mmg_casadi.colregs.profiles import scoring_profile
 from mmg_casadi.colregs.scorer import score_encounters
 from mmg_casadi.montecarlo.encounter_summary import format_verdicts
@@ -71,6 +76,7 @@ from mmg_casadi.montecarlo.results import RUN_COLUMNS
 from mmg_casadi.montecarlo.sampling import sample_scenario
 from mmg_casadi.params import PARAMETERS, resolve
 from mmg_casadi.scenarios.scenario import Scenario, scenario_from_dict, with_params
+from mmg_casadi.vessel.library import pair_collision_distance, ship_size
 
 DEFAULT_CHUNK = 48
 """Steps per ``mapaccum`` chunk (the rollout stops after the chunk in which every run has finished; outcomes do not
@@ -99,6 +105,11 @@ def sampled_scenario(environment: int, method: str, run: int, base_seed: int = 0
     params : dict or None, optional
         Parameter values (table names) written into the settings.
 
+    Returns
+    -------
+    Scenario
+        The validated scenario, its source ``env<environment>/<method>/run<run>``.
+
     Examples
     --------
     >>> sc = sampled_scenario(1, "modified-vortex", 0, params={"t_max": 100.0})
@@ -108,7 +119,9 @@ def sampled_scenario(environment: int, method: str, run: int, base_seed: int = 0
     sample = sample_scenario(environment, run, base_seed)
     targets = (params or {}).get("targets", PARAMETERS["targets"].default)
     slowdown = (params or {}).get("target_slowdown", PARAMETERS["target_slowdown"].default)
-    sc = scenario_from_dict(sample.to_scenario_dict(method=method, targets=targets, target_slowdown=slowdown),
+    hulls = (params or {}).get("target_vessels", PARAMETERS["target_vessels"].default)
+    sc = scenario_from_dict(sample.to_scenario_dict(method=method, targets=targets, target_slowdown=slowdown,
+                                                    target_vessels=hulls),
                             source=f"env{environment}/{method}/run{run}")
     return with_params(sc, params)
 
@@ -129,6 +142,11 @@ def layout_for(environment: int, method: str, params: dict | None = None) -> Lay
         Collision-avoidance method.
     params : dict or None, optional
         Parameter overrides (table names).
+
+    Returns
+    -------
+    Layout
+        The layout of run 0 with seed 0 (every run of the pair has the same one).
 
     Examples
     --------
@@ -176,6 +194,11 @@ def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: flo
         Approximate measuring time (seconds).
     max_repeats : int, default 50
         Largest number of timed calls.
+
+    Returns
+    -------
+    float
+        Time per guidance call per ship (µs).
     """
     X = np.array(X, float)
     P = np.asarray(P, float)
@@ -272,6 +295,12 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
         Final scenario state.
     t, states : array (K,), (K, N, 4)
         Decimated history (:meth:`mmg_casadi.closed_loop.simulation.BatchHistory.column`).
+
+    Returns
+    -------
+    dict
+        ``failure_mechanism`` (one of :data:`~mmg_casadi.montecarlo.failures.MECHANISMS`, ``""`` for a success)
+        and the columns of :func:`own_ship_encounters`.
     """
     P = model.params
     row = run_outcome(model.layout, x_final, model.params)
@@ -285,19 +314,48 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
     unavoidable = False
     if own["collision_kind"] in ("ship", "obstacle"):  # walls and land have no start-time test
         j, ships = own["collision_with"], scenario.ships
+        reach = float(P["collision_distance"])
         if j < len(ships):
             h = ships[j].heading_rad
             other, vel = ships[j].start, (ships[j].speed * math.cos(h), ships[j].speed * math.sin(h))
+            own_len, other_len = (ship_size(s.vessel or P["vessel"], s.length_m, unit=ships[0].vessel or P["vessel"])[0]
+                                  for s in (ships[0], ships[j]))
+            reach = pair_collision_distance(reach, own_len, other_len)
         else:
             other, vel = obstacles[j - len(ships)], (0.0, 0.0)
         unavoidable = unavoidable_at_start(ships[0].start, ships[0].heading_rad, ships[0].speed,
-                                           other, vel, collision_distance=float(P["collision_distance"]),
+                                           other, vel, collision_distance=reach,
                                            rudder_deg=float(P["delta_max_deg"]))
     mech = failure_mechanism(row["failure"], collision_time=own["collision_time"],
                              collision_with=own["collision_with"], goals=goals, obstacles=obstacles,
                              positions_at_collision=at, turn_time=turn_time_90(float(P["delta_max_deg"])),
                              near_goal_distance=float(P["near_goal_distance"]), unavoidable=unavoidable)
-    return {"failure_mechanism": mech, **own_ship_encounters(t, states, P["colregs_profile"])}
+    return {"failure_mechanism": mech, **own_ship_encounters(t, states, P["colregs_profile"]),
+            "colregs_rule9": own_ship_rule9(scenario, t, states)}
+
+
+def own_ship_rule9(scenario, t, states) -> float:
+    """The own ship's Rule 9(a) score (:func:`mmg_casadi.colregs.narrow_channel.rule9`) of one run.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The run's scenario (its walls and land).
+    t, states : array (K,), (K, N, 4)
+        Decimated history, as for :func:`own_ship_encounters`.
+
+    Returns
+    -------
+    float
+        The share of the own ship's time in a narrow channel on its starboard side; ``nan`` when she was never in
+        one.
+    """
+    banks = [seg for w in scenario.walls for seg in w.segments] + [e for land in scenario.land for e in land.edges]
+    if not banks:
+        return math.nan
+    states = np.asarray(states, float)
+    r = rule9(t, states[:, 0, :2], states[:, 0, 2], sailing_mask(states[:, :, 3])[:, 0], banks)
+    return math.nan if r is None else r.score
 
 
 def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT_CHUNK,
@@ -321,6 +379,11 @@ def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT
         Measure the compiled guidance call per ship of every batch.
     explain : bool
         Keep a history and add the failure mechanism and the own ship's COLREG compliance.
+
+    Returns
+    -------
+    list of dict
+        One row per scenario, in the order of ``scenarios``.
     """
     problems = [build_problem(sc, params) for sc in scenarios]
     groups: dict[Layout, list[int]] = {}

@@ -112,9 +112,16 @@ def unavoidable_at_start(own_start, own_heading: float, own_speed: float, other_
     other_velocity : array (2,)
         Its (constant) velocity (U).
     collision_distance : float
-        Centre distance counted as a collision (L).
+        Centre distance counted as a collision (L): for another ship the pair's
+        (:func:`~mmg_casadi.vessel.library.pair_collision_distance` of the two ships' lengths), for an obstacle the
+        table's ``collision_distance``.
     rudder_deg : float
         Rudder angle of the hard turns (degrees).
+
+    Returns
+    -------
+    bool
+        True if all three manoeuvres come within ``collision_distance`` of the other agent.
 
     Examples
     --------
@@ -164,6 +171,11 @@ def failure_mechanism(failure: str, *, collision_time=None, collision_with=None,
         ``near_goal_distance``).
     unavoidable : bool
         The agent it hit could not be avoided from the start (:func:`unavoidable_at_start`).
+
+    Returns
+    -------
+    str
+        A name of :data:`MECHANISMS`, or ``""`` when ``failure`` is empty.
 
     Examples
     --------

@@ -70,6 +70,13 @@ def shores(width: float) -> tuple[np.ndarray, np.ndarray]:
     width : float
         Channel width (L).
 
+    Returns
+    -------
+    west : numpy.ndarray (4, 2)
+        Vertices of the western shore (L).
+    east : numpy.ndarray (4, 2)
+        Vertices of the eastern shore (L).
+
     Examples
     --------
     >>> west, east = shores(10.0)
@@ -94,6 +101,11 @@ def route_clearance(a, b, polygon) -> float:
         Ends of the route.
     polygon : array-like (K, 2)
         Vertices of the polygon, in order.
+
+    Returns
+    -------
+    float
+        Clearance (L), measured at 401 points along the segment; 0.0 if one of them is inside the polygon.
 
     Examples
     --------

@@ -30,16 +30,17 @@ RUN_COLUMNS: tuple[str, ...] = (
     "min_distance", "guidance_call_us", "n_ships", "n_obstacles",
     "current_speed", "current_direction_deg", "wind_speed", "wind_direction_deg",
     "failure_mechanism", "colregs_risky", "colregs_lawful", "colregs_score", "colregs_compliant",
-    "colregs_verdicts",
+    "colregs_verdicts", "colregs_rule9",
 )
 """Columns of the results CSV, in order (version :data:`RESULTS_VERSION`)."""
 
-RESULTS_VERSION = 4
+RESULTS_VERSION = 5
 """Version of :data:`RUN_COLUMNS`: 2 added ``failure_mechanism``, ``colregs_compliant`` and
 ``colregs_encounters`` (the legacy scorer); 3 added the encounter scorer's ``colregs_risky``, ``colregs_lawful``
 and ``colregs_score``; 4 dropped the legacy scorer (``colregs_encounters``; ``colregs_compliant`` is now the
 encounter scorer's run-level flag) and added ``colregs_verdicts``
-(:mod:`mmg_casadi.montecarlo.encounter_summary`); a table of another version is refused, never misread."""
+(:mod:`mmg_casadi.montecarlo.encounter_summary`); 5 added ``colregs_rule9`` (the own ship's Rule 9(a) score in a
+narrow channel, :mod:`mmg_casadi.colregs.narrow_channel`); a table of another version is refused, never misread."""
 
 _RETIRED_COLUMNS = frozenset({"colregs_encounters"})  # columns of older versions, no longer written
 
@@ -202,11 +203,22 @@ class ResultsTable:
 
         Integers are ``int`` (``None`` if empty), booleans ``bool`` (``None`` if empty), numbers ``float``
         (``nan`` if empty), text ``str`` (``""`` if empty). An incomplete final line is ignored.
+
+        Returns
+        -------
+        list of dict
+            One dict per stored row, column name to typed value, in file order.
         """
         return self._scan()[0]
 
     def completed(self) -> set[tuple[int, str, int]]:
-        """Keys ``(environment, method, run)`` already stored."""
+        """Keys ``(environment, method, run)`` already stored.
+
+        Returns
+        -------
+        set of tuple of (int, str, int)
+            The ``(environment, method, run)`` of every stored row (a copy).
+        """
         rows, end, size = self._scan()
         keys = {_key(r) for r in rows}
         self._cache = (size, end, keys)
@@ -341,6 +353,15 @@ def mean_ci(values, z: float = Z_95) -> tuple[float, float, float]:
     z : float, default 1.96
         Normal quantile of the interval (1.96 for 95 %).
 
+    Returns
+    -------
+    mean : float
+        Mean of the finite values (``nan`` without any).
+    low : float
+        Lower end of the interval (``nan`` with fewer than two values).
+    high : float
+        Upper end of the interval (``nan`` with fewer than two values).
+
     Examples
     --------
     >>> [round(x, 4) for x in mean_ci([1.0, 2.0, 3.0, float("nan")])]
@@ -384,7 +405,13 @@ class Summary:
         return sorted({r["environment"] for r in self.rows})
 
     def to_dict(self) -> dict:
-        """Column-oriented dictionary ``{column: [values]}`` over :data:`SUMMARY_COLUMNS`."""
+        """Column-oriented dictionary ``{column: [values]}`` over :data:`SUMMARY_COLUMNS`.
+
+        Returns
+        -------
+        dict
+            Each column of :data:`SUMMARY_COLUMNS` to the list of its values, one per row.
+        """
         return {c: [r[c] for r in self.rows] for c in SUMMARY_COLUMNS}
 
     def to_csv(self, path) -> Path:
@@ -394,6 +421,11 @@ class Summary:
         ----------
         path : str or path-like
             Path of the CSV file to write.
+
+        Returns
+        -------
+        pathlib.Path
+            The path written.
         """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -408,6 +440,11 @@ class Summary:
         """A Markdown table: success in % (one decimal), metrics to 3 significant digits, ``mean [low, high]``.
 
         Numbers of 1000 and above are rounded to 3 significant digits without an exponent; ``nan`` is ``n/a``.
+
+        Returns
+        -------
+        str
+            The table, one row per (environment, method), without a final newline.
 
         Examples
         --------
@@ -441,6 +478,11 @@ class Summary:
     def failures_markdown(self) -> str:
         """A Markdown table of the failed runs of every cell by mechanism (:data:`MECHANISMS`).
 
+        Returns
+        -------
+        str
+            The table: per (environment, method) the runs, the failed runs and the count of each mechanism.
+
         Examples
         --------
         >>> rows = [{"environment": 1, "method": "apf", "run": 0, "success": False, "failure_mechanism": "near-goal"}]
@@ -457,7 +499,13 @@ class Summary:
         return "\n".join(lines)
 
     def to_pandas(self):
-        """The summary as a ``pandas.DataFrame``."""
+        """The summary as a ``pandas.DataFrame``.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per (environment, method), the columns of :data:`SUMMARY_COLUMNS`.
+        """
         return pd.DataFrame(self.rows, columns=list(SUMMARY_COLUMNS))
 
 
@@ -498,6 +546,8 @@ def summarize(rows) -> Summary:
     Returns
     -------
     Summary
+        One row per (environment, method) with the columns of :data:`SUMMARY_COLUMNS`, environments ascending and
+        methods in order of first appearance.
 
     Examples
     --------

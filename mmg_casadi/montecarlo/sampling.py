@@ -191,6 +191,12 @@ class SampledScenario:
     def to_dict(self) -> dict:
         """Plain-Python dictionary of all fields (lists instead of arrays), e.g. for JSON.
 
+        Returns
+        -------
+        dict
+            ``environment``, ``run``, ``seed``, ``starts``, ``goals`` (L), ``headings`` (rad), ``speeds`` (fractions of
+            U_des), ``obstacles`` (L), ``obstacle_radius`` (L) and, with land, ``land`` (polygons in L).
+
         Examples
         --------
         >>> sorted(sample_scenario(1, 0).to_dict())[:3]
@@ -213,7 +219,8 @@ class SampledScenario:
                          t_max: float = PARAMETERS["t_max"].default, r_safe: float = PARAMETERS["r_safe"].default,
                          collision_distance: float = PARAMETERS["collision_distance"].default,
                          targets: str = PARAMETERS["targets"].default,
-                         target_slowdown: float = PARAMETERS["target_slowdown"].default) -> dict:
+                         target_slowdown: float = PARAMETERS["target_slowdown"].default,
+                         target_vessels: str = PARAMETERS["target_vessels"].default) -> dict:
         """The scenario in the shape of a TOML scenario file, so a run can be replayed on its own.
 
         Ships are named ``agent0`` (own ship), ``agent1``, ...; headings are written in degrees; every ship
@@ -233,6 +240,10 @@ class SampledScenario:
             Fraction of its speed every ship but the own ship takes off halfway along its route: its waypoints
             become the midpoint and the goal, with the speeds ``[v, (1 - target_slowdown) v]`` (parameter
             ``target_slowdown``); 0 keeps one waypoint at constant speed, the scenario unchanged.
+        target_vessels : str, default "own"
+            Hulls of the ships but the own ship (parameter ``target_vessels``): ``"own"`` writes none (every ship
+            the table's ``vessel``, the scenario unchanged); a vessel name or two separated by a comma, taken in
+            turn. Each ship's ``speed`` is a fraction of its own hull's design speed.
 
         Returns
         -------
@@ -251,12 +262,15 @@ class SampledScenario:
         >>> t = sample_scenario(1, 0).to_scenario_dict(target_slowdown=0.5)["ships"][1]
         >>> len(t["waypoints"]), t["speeds"][1] == 0.5 * t["speed"] == 0.5 * t["speeds"][0]
         (2, True)
+        >>> [s.get("vessel") for s in sample_scenario(2, 0).to_scenario_dict(target_vessels="kvlcc2,kcs")["ships"]]
+        [None, 'kvlcc2', 'kcs', 'kvlcc2']
         """
         if not isinstance(method, str) or not method:
             raise InputError("method", "a non-empty method name", method)
         if targets not in PARAMETERS["targets"].choices:
             raise InputError("targets", f"one of: {', '.join(PARAMETERS['targets'].choices)}", targets)
         target_slowdown = PARAMETERS["target_slowdown"].check(target_slowdown, cls=InputError)
+        target_vessels = PARAMETERS["target_vessels"].check(target_vessels, cls=InputError)
         settings = {"method": method}
         for name, value in (("dt", dt), ("t_max", t_max), ("r_safe", r_safe),
                             ("collision_distance", collision_distance)):
@@ -276,6 +290,10 @@ class SampledScenario:
         if targets == "hold":
             for ship in ships[1:]:
                 ship["method"] = "none"
+        if target_vessels != "own":
+            hulls = target_vessels.split(",")
+            for k, ship in enumerate(ships[1:]):
+                ship["vessel"] = hulls[k % len(hulls)]
         if target_slowdown > 0:
             for i, ship in enumerate(ships[1:], start=1):
                 mid = 0.5 * (self.starts[i] + self.goals[i])
@@ -337,6 +355,7 @@ def sample_scenario(environment: int, run: int, base_seed: int = 0,
     Returns
     -------
     SampledScenario
+        Starts, goals (L), headings (rad), speeds (fractions of U_des), obstacles (L) and, for environment 6, land.
 
     Raises
     ------
@@ -403,6 +422,11 @@ def sample_traffic(n_ships: int, seed: int = 0, config: SamplerConfig = SamplerC
     config : SamplerConfig
         Placement rules; ``area`` is the side for 10 ships.
 
+    Returns
+    -------
+    SampledScenario
+        The traffic, ``environment = 0`` and ``run = 0``.
+
     Examples
     --------
     >>> s = sample_traffic(40, seed=1)
@@ -435,6 +459,11 @@ def parse_envs(text: str) -> tuple[int, ...]:
     ----------
     text : str
         Environments as ranges and/or comma-separated numbers.
+
+    Returns
+    -------
+    tuple of int
+        The environments, sorted and without duplicates.
 
     Examples
     --------

@@ -38,6 +38,13 @@ def wilson(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
     confidence : float
         Confidence level.
 
+    Returns
+    -------
+    low : float
+        Lower end of the interval, in [0, 1].
+    high : float
+        Upper end of the interval, in [0, 1].
+
     Examples
     --------
     >>> [round(v, 4) for v in wilson(95, 100)]
@@ -88,6 +95,11 @@ class PairedComparison:
         ----------
         alpha : float
             Significance level.
+
+        Returns
+        -------
+        bool
+            True if :attr:`p_value` is below ``alpha``.
         """
         return self.p_value < alpha
 
@@ -98,13 +110,24 @@ class PairedComparison:
         ----------
         alpha : float
             Significance level.
+
+        Returns
+        -------
+        str
+            One of ``"A better"``, ``"B better"``, ``"no significant difference"``.
         """
         if not self.significant(alpha):
             return "no significant difference"
         return "A better" if self.difference > 0 else "B better"
 
     def to_dict(self) -> dict:
-        """The fields as a plain dict (``ci`` as a list)."""
+        """The fields as a plain dict (``ci`` as a list).
+
+        Returns
+        -------
+        dict
+            The dataclass fields by name, ``ci`` as ``[low, high]``.
+        """
         d = asdict(self)
         d["ci"] = list(self.ci)
         return d
@@ -123,6 +146,7 @@ def paired_comparison(success_a, success_b, confidence: float = 0.95) -> PairedC
     Returns
     -------
     PairedComparison
+        Rates, the outcome counts, the difference ``rate_a - rate_b`` with its interval and the McNemar p-value.
     """
     a = np.asarray(success_a, dtype=bool).ravel()
     b = np.asarray(success_b, dtype=bool).ravel()

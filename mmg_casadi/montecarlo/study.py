@@ -43,6 +43,7 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import hashlib
+import importlib.util
 import json
 import os
 import sys
@@ -56,7 +57,7 @@ from mmg_casadi.guidance import methods as method_registry
 from mmg_casadi.io import json_safe, write_json
 from mmg_casadi.limits import check_runs, check_study_size
 from mmg_casadi.montecarlo.batching import (BACKENDS, DEFAULT_BATCH, LocalExecutor, RayExecutor, _check_workers,
-                                            plan_batches, prepare_layouts)
+                                            check_ray_address, plan_batches, prepare_layouts)
 from mmg_casadi.montecarlo import encounter_summary
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges
 from mmg_casadi.montecarlo.execution import (DEFAULT_CHUNK, _non_default, _run_disturbances, layout_for,
@@ -145,6 +146,10 @@ def check_study_args(*, runs=200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS,
         for key in (f"{name}_speed", f"{name}_direction_deg"):
             if rng is not None and resolved[key] != PARAMETERS[key].default:
                 raise InputError(name, f"nothing while params sets {key} (a fixed {name})", list(rng))
+    if backend == "ray":  # last: it may wait for the network (a bad address used to fail after the compile)
+        if importlib.util.find_spec("ray") is None:
+            raise InputError("backend", "'local' (Ray is not installed; pip install 'mmg-casadi[ray]')", backend)
+        check_ray_address(address)
     return {"runs": runs, "envs": envs, "methods": methods, "base_seed": base_seed, "workers": workers,
             "batch_size": batch_size, "chunk": chunk, "params": resolved, "ranges": ranges}
 
@@ -313,6 +318,11 @@ def fingerprint(params: dict, ranges: DisturbanceRanges = DisturbanceRanges()) -
     ranges : DisturbanceRanges, optional
         Ranges of the per-run disturbance.
 
+    Returns
+    -------
+    str
+        64 hexadecimal digits.
+
     Examples
     --------
     >>> from mmg_casadi.params import resolve
@@ -433,6 +443,11 @@ def write_failures(rows, directory, *, params: dict | None = None, limit: int = 
         The study's parameters.
     limit : int
         Files per (environment, method).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
     """
     directory = Path(directory)
     by_cell: dict[tuple[int, str], list[dict]] = {}

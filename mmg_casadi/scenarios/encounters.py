@@ -31,6 +31,11 @@ def waypoint_square(side: float = SQUARE_SIDE) -> Scenario:
     ----------
     side : float
         Side length (L).
+
+    Returns
+    -------
+    Scenario
+        The waypoint-tracking scenario (method ``none``).
     """
     wps = [[side, 0.0], [side, side], [0.0, side], [0.0, 0.0]]
     d = {"settings": {"method": "none", "t_max": 600.0},
@@ -41,7 +46,13 @@ def waypoint_square(side: float = SQUARE_SIDE) -> Scenario:
 def static_obstacle_cases() -> dict[str, Scenario]:
     """Own ship from the origin heading north, obstacle of radius L/2 at (25, 0) L, goal at (50, 0) L
     (``goal-50``, the shipped file) or (60, 0) L (``goal-60``); ``starboard-bow`` puts the obstacle at
-    (25, 1.5) L, the paper's sink-vortex failure mode (its coordinates are not given)."""
+    (25, 1.5) L, the paper's sink-vortex failure mode (its coordinates are not given).
+
+    Returns
+    -------
+    dict of Scenario
+        ``"goal-50"``, ``"goal-60"`` and ``"starboard-bow"``.
+    """
     base = packaged_scenario("static_obstacle")
     own = base.ships[0]
     ob = base.obstacles[0]
@@ -53,23 +64,46 @@ def static_obstacle_cases() -> dict[str, Scenario]:
 
 
 def colregs_cases() -> dict[str, Scenario]:
-    """COLREG rules 13–15: overtaking, head-on and crossing (the shipped files)."""
+    """COLREG rules 13–15: overtaking, head-on and crossing (the shipped files).
+
+    Returns
+    -------
+    dict of Scenario
+        ``"overtaking"``, ``"head-on"`` and ``"crossing"``.
+    """
     return {"overtaking": packaged_scenario("overtaking"), "head-on": packaged_scenario("head_on"),
             "crossing": packaged_scenario("crossing")}
 
 
 def conflict_cases() -> dict[str, Scenario]:
-    """The three-ship conflicting-responsibility case (the shipped file)."""
+    """The three-ship conflicting-responsibility case (the shipped file).
+
+    Returns
+    -------
+    dict of Scenario
+        ``"three-ships"``.
+    """
     return {"three-ships": packaged_scenario("conflict")}
 
 
 def narrow_channel_cases() -> dict[str, Scenario]:
-    """Head-on in a 10 L wide channel along the diagonal (the shipped file)."""
+    """Head-on in a 10 L wide channel along the diagonal (the shipped file).
+
+    Returns
+    -------
+    dict of Scenario
+        ``"head-on"``.
+    """
     return {"head-on": packaged_scenario("narrow_channel")}
 
 
 def paper_encounters() -> dict[str, Scenario]:
     """The encounters the tuning trains on: static obstacle (goal 50 L), the three COLREG cases and the conflict.
+
+    Returns
+    -------
+    dict of Scenario
+        ``"static-obstacle"``, ``"overtaking"``, ``"head-on"``, ``"crossing"`` and ``"conflict"``.
 
     Examples
     --------

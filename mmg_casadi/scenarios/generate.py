@@ -207,7 +207,13 @@ class Description:
     source: str = "<dict>"
 
     def to_dict(self) -> dict:
-        """The description with every default filled in, shaped like the file (JSON-ready)."""
+        """The description with every default filled in, shaped like the file (JSON-ready).
+
+        Returns
+        -------
+        dict
+            Tables ``set``, ``own_ship`` and ``groups`` (per target its ``type`` and ranges as ``[low, high]`` lists).
+        """
         return {"set": {k: getattr(self, k) for k in SET_DEFAULTS},
                 "own_ship": {"start": list(self.own_start), "course": self.own_course, "speed": self.own_speed,
                              "leg": self.own_leg},
@@ -331,6 +337,7 @@ def description_from_dict(d: dict, source: str = "<dict>") -> Description:
     Returns
     -------
     Description
+        The validated description, defaults filled in.
 
     Raises
     ------
@@ -440,6 +447,7 @@ def load_description(path) -> Description:
     Returns
     -------
     Description
+        The validated description, defaults filled in.
 
     Raises
     ------
@@ -651,6 +659,7 @@ def classified(sc: Scenario, types, profile="iitm-lab", t_end: float | None = No
     Returns
     -------
     bool
+        True if every target meets the own ship in its requested encounter, with the expected roles.
 
     Examples
     --------
@@ -687,6 +696,7 @@ def generate(d: Description) -> EncounterSet:
     Returns
     -------
     EncounterSet
+        The description, the ``d.situations`` accepted situations in order and the draw statistics.
 
     Raises
     ------
@@ -832,6 +842,7 @@ def override(d: Description, *, situations: int | None = None, seed: int | None 
     Returns
     -------
     Description
+        A new description; ``d`` is not changed.
 
     Examples
     --------

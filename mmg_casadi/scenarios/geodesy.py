@@ -22,11 +22,14 @@ exactly: along the geodesic from the reference (azimuth ``a2`` at the point) the
 becomes the plane angle ``a1 + atan2(sin(c - a2) s/m, cos(c - a2))``;
 :meth:`LocalPlane.course_from_plane` inverts it. Used by
 :mod:`mmg_casadi.scenarios.maritime_schema` (reading) and :mod:`mmg_casadi.scenarios.maritime_export` (writing).
+A converted scenario records its plane's reference in a comment (:func:`scenario_header`, read back by
+:func:`read_header`).
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 from geographiclib.geodesic import Geodesic
@@ -259,3 +262,59 @@ class LocalPlane:
         a1, a2, scale = self._frame(lat, lon, field)
         t = math.radians(angle_deg - a1)
         return wrap_360(a2 + math.degrees(math.atan2(math.sin(t) / scale, math.cos(t))))
+
+
+_HEADER = re.compile(r"^# maritime-schema reference: lat = (\S+), lon = (\S+), length = (\S+) m$", re.M)
+
+
+def scenario_header(plane: LocalPlane, unit_m: float) -> str:
+    """A TOML comment recording the reference of a converted scenario (read back by :func:`read_header`).
+
+    Parameters
+    ----------
+    plane : LocalPlane
+        The plane the scenario is drawn in; its reference ``lat``, ``lon`` [deg] are recorded.
+    unit_m : float
+        The length unit [m per ship length] of the scenario.
+
+    Returns
+    -------
+    str
+        Two comment lines, each ending with a newline, to be put before the scenario's TOML text.
+
+    Examples
+    --------
+    >>> read_header(scenario_header(LocalPlane(58.5, 10.25), 230.0))
+    (58.5, 10.25, 230.0)
+    """
+    return (f"# maritime-schema reference: lat = {plane.lat!r}, lon = {plane.lon!r}, length = {unit_m!r} m\n"
+            "# (x north, y east in the azimuthal equidistant plane about this point; lengths in ship lengths)\n")
+
+
+def read_header(text: str):
+    """(lat, lon, length_m) from a :func:`scenario_header` comment in ``text``, or None.
+
+    Parameters
+    ----------
+    text : str
+        Text of a scenario TOML file; the first header line anywhere in it counts.
+
+    Returns
+    -------
+    (float, float, float) or None
+        Reference latitude and longitude [deg] and the length unit [m]; None if there is no header line or
+        one of its numbers is not a finite float.
+
+    Examples
+    --------
+    >>> read_header("[settings]") is None
+    True
+    """
+    m = _HEADER.search(text)
+    if m is None:
+        return None
+    try:
+        values = tuple(float(v) for v in m.groups())
+    except ValueError:
+        return None
+    return values if all(math.isfinite(v) for v in values) else None

@@ -86,6 +86,12 @@ def imazu_case(k: int, *, method: str, targets: str = "hold", t_max: float = T_M
     t_max : float
         Horizon (L/U).
 
+    Returns
+    -------
+    dict
+        ``settings`` (``method``, ``t_max``) and ``ships``: the own ship from the origin heading north, then the
+        targets (positions in L, headings in degrees, speeds as fractions of U_des).
+
     Examples
     --------
     >>> d = imazu_case(3, method="velocity-obstacle", targets="avoid")
@@ -167,6 +173,11 @@ def own_encounters(result) -> list[dict]:
     ----------
     result : ScenarioResult
         Result of :func:`~mmg_casadi.scenarios.run.run_scenario`.
+
+    Returns
+    -------
+    list of dict
+        The applicable, judged encounters (``compliant`` not None) as stored in ``metrics.json``.
     """
     own = result.metrics["ships"][0]["name"]
     out = []

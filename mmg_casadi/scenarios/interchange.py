@@ -2,7 +2,8 @@
 
 JSON → TOML reads the situation with :func:`~mmg_casadi.scenarios.maritime_schema.load_traffic_situation` and
 writes the scenario after a comment recording the plane's reference and the length unit
-(:func:`scenario_header`); TOML → JSON reads that comment back (:func:`read_header`) and writes the situation
+(:func:`~mmg_casadi.scenarios.geodesy.scenario_header`); TOML → JSON reads that comment back
+(:func:`~mmg_casadi.scenarios.geodesy.read_header`) and writes the situation
 with :func:`~mmg_casadi.scenarios.maritime_export.dump_traffic_situation`. :func:`convert_file` is the
 ``mmg-casadi convert`` command.
 
@@ -15,71 +16,16 @@ from __future__ import annotations
 
 import json
 import math
-import re
 import tomllib
 from pathlib import Path
 
 from mmg_casadi.errors import ScenarioError
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
-from mmg_casadi.scenarios.geodesy import LocalPlane
+from mmg_casadi.scenarios.geodesy import LocalPlane, read_header, scenario_header
 from mmg_casadi.scenarios.maritime_export import DEFAULT_REFERENCE, dump_traffic_situation
-from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
+from mmg_casadi.scenarios.maritime_schema import hull_choices, load_traffic_situation
 from mmg_casadi.scenarios.scenario import dump_scenario, load_scenario, scenario_from_dict
 
-_HEADER = re.compile(r"^# maritime-schema reference: lat = (\S+), lon = (\S+), length = (\S+) m$", re.M)
-
-
-def scenario_header(plane: LocalPlane, unit_m: float) -> str:
-    """A TOML comment recording the reference of a converted scenario (read back by :func:`read_header`).
-
-    Parameters
-    ----------
-    plane : LocalPlane
-        The plane the scenario is drawn in; its reference ``lat``, ``lon`` [deg] are recorded.
-    unit_m : float
-        The length unit [m per ship length] of the scenario.
-
-    Returns
-    -------
-    str
-        Two comment lines, each ending with a newline, to be put before the scenario's TOML text.
-
-    Examples
-    --------
-    >>> read_header(scenario_header(LocalPlane(58.5, 10.25), 230.0))
-    (58.5, 10.25, 230.0)
-    """
-    return (f"# maritime-schema reference: lat = {plane.lat!r}, lon = {plane.lon!r}, length = {unit_m!r} m\n"
-            "# (x north, y east in the azimuthal equidistant plane about this point; lengths in ship lengths)\n")
-
-
-def read_header(text: str):
-    """(lat, lon, length_m) from a :func:`scenario_header` comment in ``text``, or None.
-
-    Parameters
-    ----------
-    text : str
-        Text of a scenario TOML file; the first header line anywhere in it counts.
-
-    Returns
-    -------
-    (float, float, float) or None
-        Reference latitude and longitude [deg] and the length unit [m]; None if there is no header line or
-        one of its numbers is not a finite float.
-
-    Examples
-    --------
-    >>> read_header("[settings]") is None
-    True
-    """
-    m = _HEADER.search(text)
-    if m is None:
-        return None
-    try:
-        values = tuple(float(v) for v in m.groups())
-    except ValueError:
-        return None
-    return values if all(math.isfinite(v) for v in values) else None
 
 
 def json_to_toml_text(path, **kw) -> str:
@@ -196,7 +142,8 @@ def convert_file(src, out, *, method: str = DEFAULT_METHOD, target_method: str =
     Returns
     -------
     dict
-        ``{"out": str(out), "ships": number of ships}``.
+        ``{"out": str(out), "ships": number of ships, "hulls": lines}``: for a JSON input, the hull each ship of
+        known length sails and why (:func:`~mmg_casadi.scenarios.maritime_schema.hull_choices`), else empty.
     """
     src, out = Path(src), Path(out)
     kinds = {".json": ".toml", ".toml": ".json"}
@@ -208,12 +155,13 @@ def convert_file(src, out, *, method: str = DEFAULT_METHOD, target_method: str =
         reference = parse_reference(reference)
     if src.suffix.lower() == ".json":
         text = json_to_toml_text(src, method=method, target_method=target_method, length_scale=length_scale)
-        n = len(scenario_from_dict(tomllib.loads(text)).ships)
+        sc = scenario_from_dict(tomllib.loads(text))
+        n, hulls = len(sc.ships), hull_choices(sc)
     else:
         text = toml_to_json_text(src, reference=reference)
-        n = 1 + len(json.loads(text)["targetShips"])
+        n, hulls = 1 + len(json.loads(text)["targetShips"]), []
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_suffix(out.suffix + ".tmp")
     tmp.write_text(text, encoding="utf-8")
     tmp.replace(out)
-    return {"out": str(out), "ships": n}
+    return {"out": str(out), "ships": n, "hulls": hulls}

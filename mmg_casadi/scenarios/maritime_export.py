@@ -19,6 +19,7 @@ from mmg_casadi.errors import ScenarioError
 from mmg_casadi.scenarios.geodesy import LocalPlane
 from mmg_casadi.scenarios.maritime_schema import KNOT, check_number
 from mmg_casadi.scenarios.scenario import Scenario
+from mmg_casadi.vessel.library import load_vessel
 from mmg_casadi.vessel.ship import load_kcs
 
 DEFAULT_REFERENCE = (58.61, 10.59)
@@ -95,11 +96,14 @@ def scenario_to_traffic_situation(sc: Scenario, *, reference=DEFAULT_REFERENCE, 
     for i, s in enumerate(sc.ships):
         start = pos(s.start, f"ships[{i}].start")
         course = plane.course_from_plane(s.heading_deg, start["lat"], start["lon"], field=f"ships[{i}].start")
-        sog = s.speed * u_des / KNOT
-        legs = s.speeds or (s.speed,) * len(s.waypoints)
+        # speeds are fractions of the ship's own hull's design speed (Froude-scaled with the unit as the KCS's)
+        u_ship = u_des if s.vessel is None else load_vessel(s.vessel).ship.U_design * u_des / kcs.U_design
+        sog = s.speed * u_ship / KNOT
+        route, legs = (s.waypoints, s.speeds or (s.speed,) * len(s.waypoints)) if s.track is None else \
+            _track_route(s.track)
         wps = [{"position": start}] + [{"position": pos(p, f"ships[{i}].waypoints[{j}]"),
-                                        "leg": {"sog": v * u_des / KNOT}}
-                                       for j, (p, v) in enumerate(zip(s.waypoints, legs))]
+                                        "leg": {"sog": v * u_ship / KNOT}}
+                                       for j, (p, v) in enumerate(zip(route, legs))]
         ships.append({
             "static": _static(s, unit, i, used),
             "initial": {"position": start, "sog": sog, "cog": course, "heading": course,
@@ -110,6 +114,15 @@ def scenario_to_traffic_situation(sc: Scenario, *, reference=DEFAULT_REFERENCE, 
             "description": f"written by mmg-casadi; {len(sc.ships)} ships, collision-avoidance method "
                            f"{sc.settings.method}",
             "ownShip": ships[0], "targetShips": ships[1:]}
+
+
+def _track_route(track) -> tuple[list, list]:
+    """A replayed ship's route for export: its track's samples after the start (L) and the speed of the track on
+    the way to each (U); the timing between them is the recorded one only as far as a constant speed per leg is."""
+    later = [k for k, t in enumerate(track.t) if t > 0]
+    points = [(track.x[k], track.y[k]) for k in later]
+    speeds = [track.speed(0.5 * (max(track.t[k - 1], 0.0) + track.t[k])) for k in later]
+    return points, speeds
 
 
 def _static(s, unit: float, index: int, used: set) -> dict:

@@ -27,12 +27,17 @@ outside the model's range :data:`~mmg_casadi.scenarios.scenario.SPEED_RANGE` a
 :class:`~mmg_casadi.errors.ScenarioError` names the field.
 
 Static data. Each ship's ``static`` object is kept in its :class:`~mmg_casadi.scenarios.scenario.ShipSpec`: the
-length and width (m) become ``length_m`` and ``beam_m`` (data: every ship is simulated as the hull of length L),
-everything else (``id``, ``mmsi``, ``imo``, ``shipType``, ``sogMax``, ``dimensions.height``, any other key)
+length and width (m) become ``length_m`` and ``beam_m`` (each ship's collision geometry), everything else (``id``, ``mmsi``, ``imo``, ``shipType``, ``sogMax``, ``dimensions.height``, any other key)
 ``metadata``, under the names of schema 0.2.0: the flat ``length``, ``width``, ``height`` of the older files go
 to ``dimensions`` and trafficgen's ``speedMax`` (maximum speed in knots) to ``sogMax``, its name in 0.2.0.
 ``name`` becomes the ship's name (kept in ``metadata`` only when the scenario's name differs: a blank, repeated
 or padded name); keys whose value is null are left out.
+
+Hulls. With lengths in KCS lengths, a target of known length sails the library's closest hull
+(:func:`~mmg_casadi.vessel.library.closest_vessel`: of its kind if ``shipType`` names one, e.g. a tanker, then the
+closest length), written as its ``vessel`` when it is not the KCS; its speeds are then fractions of that hull's
+design speed (15.5 kn for the KVLCC2). :func:`hull_choices` says which hull each ship got. The own ship is the
+table's ``vessel``, the scenario's unit.
 
 Ships. The own ship uses ``method`` (the scenario's ``settings.method``); target ships use ``target_method``
 (``"none"``: they track their own waypoints, or hold their course, without avoiding anyone). Waypoints within
@@ -55,7 +60,9 @@ from mmg_casadi.errors import ScenarioError
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
 from mmg_casadi.guidance.methods import NAMES as METHODS
 from mmg_casadi.scenarios.geodesy import LocalPlane, initial_azimuth
+from mmg_casadi.scenarios.geojson_land import land_polygons, read_geojson
 from mmg_casadi.scenarios.scenario import SPEED_RANGE, Scenario, check_metadata, scenario_from_dict
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, closest_vessel, load_vessel
 from mmg_casadi.vessel.ship import load_kcs
 
 KNOT = 1852.0 / 3600.0
@@ -263,7 +270,8 @@ def _extend(start, path, heading_rad: float, needed: float):
 
 def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, target_method: str = "none",
                                   length_scale: str = "kcs", extend_past: float = EXTEND_PAST,
-                                  source: str = "<json>") -> tuple[Scenario, LocalPlane, float]:
+                                  source: str = "<json>", land: dict | None = None,
+                                  land_source: str = "<geojson>") -> tuple[Scenario, LocalPlane, float]:
     """A :class:`Scenario` from a maritime-schema traffic situation (a parsed JSON object).
 
     Parameters
@@ -280,6 +288,11 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
         Minimum path length past the last closest approach [ship lengths], ≥ 0.
     source : str
         Name for error messages.
+    land : dict, optional
+        A parsed GeoJSON object whose Polygon/MultiPolygon features are land
+        (:func:`~mmg_casadi.scenarios.geojson_land.land_polygons`, projected on the same plane in the same unit).
+    land_source : str
+        Name of the GeoJSON object in error messages.
 
     Returns
     -------
@@ -335,12 +348,17 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
         lo, hi = SPEED_RANGE
         rows = []
         names: dict[str, int] = {}
-        for s in ships:
-            speed = s.sog_kn * KNOT / u_des
+        for k, s in enumerate(ships):
+            # a target of known length sails the library's closest hull (lengths in KCS lengths only); its speeds
+            # are fractions of that hull's design speed
+            hull, why = closest_vessel(s.length_m, s.metadata.get("shipType")) if k and length_scale == "kcs" \
+                else (DEFAULT_VESSEL, "")
+            u_ship = u_des if hull == DEFAULT_VESSEL else load_vessel(hull).ship.U_design
+            speed = s.sog_kn * KNOT / u_ship
             if not lo <= speed <= hi:
-                raise ScenarioError(f"{s.field}.initial.sog", f"a speed in [{lo * u_des / KNOT:.2f}, "
-                                    f"{hi * u_des / KNOT:.2f}] kn ([{lo:g}, {hi:g}] x the design speed "
-                                    f"{u_des / KNOT:.2f} kn)", s.sog_kn)
+                raise ScenarioError(f"{s.field}.initial.sog", f"a speed in [{lo * u_ship / KNOT:.2f}, "
+                                    f"{hi * u_ship / KNOT:.2f}] kn ([{lo:g}, {hi:g}] x the design speed "
+                                    f"{u_ship / KNOT:.2f} kn of the hull {hull})", s.sog_kn)
             x, y = plane.to_plane(s.lat, s.lon, field=s.start_field)
             start = (x / unit, y / unit)
             heading = plane.course_to_plane(s.heading, s.lat, s.lon, field=s.start_field)
@@ -353,7 +371,7 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
                     continue
                 path.append(p)
                 legs.append(speed if s.leg_sog_kn[j] is None else
-                            _leg_speed(s.leg_sog_kn[j], u_des, f"{s.field}.waypoints[{j}].leg.sog"))
+                            _leg_speed(s.leg_sog_kn[j], u_ship, f"{s.field}.waypoints[{j}].leg.sog"))
             name = s.name if s.name not in names else f"{s.name} ({len(rows)})"
             names[name] = len(rows)
             metadata = dict(s.metadata)
@@ -361,18 +379,18 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
                 metadata["name"] = s.raw_name  # the name as read, when the scenario's differs
             rows.append({"name": name, "start": start, "heading": heading, "course": course, "speed": speed,
                          "path": path, "legs": legs, "metadata": metadata, "length_m": s.length_m,
-                         "beam_m": s.beam_m})
+                         "beam_m": s.beam_m, "vessel": hull, "why": why, "scene_speed": speed * u_ship / u_des})
         starts = [np.asarray(r["start"]) for r in rows]
-        vel = [r["speed"] * np.array([math.cos(math.radians(r["course"])), math.sin(math.radians(r["course"]))])
-               for r in rows]
+        vel = [r["scene_speed"] * np.array([math.cos(math.radians(r["course"])),
+                                            math.sin(math.radians(r["course"]))]) for r in rows]
         t_cpa = _last_cpa_time(starts, vel)
         t_sail = 0.0
         out_ships = []
         for i, r in enumerate(rows):
-            needed = r["speed"] * t_cpa + extend_past
+            needed = r["scene_speed"] * t_cpa + extend_past
             path = _extend(r["start"], r["path"], math.radians(r["course"]), needed)
             pts = [r["start"]] + path
-            t_sail = max(t_sail, sum(math.dist(a, b) for a, b in zip(pts[:-1], pts[1:])) / r["speed"])
+            t_sail = max(t_sail, sum(math.dist(a, b) for a, b in zip(pts[:-1], pts[1:])) / r["scene_speed"])
             ship = {"name": r["name"], "start": list(r["start"]), "heading": r["heading"], "speed": r["speed"],
                     "waypoints": [list(p) for p in path]}
             legs = r["legs"] + [r["legs"][-1] if r["legs"] else r["speed"]] * (len(path) - len(r["legs"]))
@@ -380,23 +398,72 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
                 ship["speeds"] = legs
             if i > 0:
                 ship["method"] = target_method
+            if r["vessel"] != DEFAULT_VESSEL:
+                ship["vessel"] = r["vessel"]
             ship.update({k: r[k] for k in ("length_m", "beam_m") if r[k] is not None})
             if r["metadata"]:
                 ship["metadata"] = r["metadata"]
             out_ships.append(ship)
         t_max = min(10000.0, max(300.0, math.ceil(T_MAX_MARGIN * t_sail)))
-        sc = scenario_from_dict({"settings": {"method": method, "t_max": t_max}, "ships": out_ships},
-                                source=source)
+        table = {"settings": {"method": method, "t_max": t_max}, "ships": out_ships}
+        if land is not None:
+            table["land"] = [{"points": [list(p) for p in poly]}
+                             for poly in land_polygons(land, plane, unit, land_source)]
+        sc = scenario_from_dict(table, source=source)
     except ScenarioError as err:
         err.source = source
         raise
     return sc, plane, unit
 
 
+def hull_choices(sc: Scenario) -> list[str]:
+    """One line per ship of an imported scenario with a length: the hull it sails and why.
+
+    Parameters
+    ----------
+    sc : Scenario
+        A scenario from :func:`traffic_situation_to_scenario`.
+
+    Returns
+    -------
+    list of str
+        E.g. ``"ship2: 300 m, Tanker -> kvlcc2 (tanker hull, closest length (320 m))"``; the own ship's line says
+        it is the table's hull.
+
+    Examples
+    --------
+    >>> sit = {"ownShip": {"static": {"id": 1, "name": "OS", "dimensions": {"length": 230.0}},
+    ...     "initial": {"position": {"lat": 58.0, "lon": 10.0}, "sog": 12.0, "cog": 0.0}},
+    ...     "targetShips": [{"static": {"id": 2, "shipType": "Tanker", "dimensions": {"length": 300.0}},
+    ...     "initial": {"position": {"lat": 58.1, "lon": 10.0}, "sog": 12.0, "cog": 180.0}}]}
+    >>> sc = traffic_situation_to_scenario(sit)[0]
+    >>> sc.ships[1].vessel, round(sc.ships[1].speed, 3)   # 12 kn of the KVLCC2's 15.5 kn
+    ('kvlcc2', 0.774)
+    >>> hull_choices(sc)[1]
+    'ship2: 300 m, Tanker -> kvlcc2 (tanker hull, closest length (320 m))'
+    """
+    out = []
+    for i, s in enumerate(sc.ships):
+        if s.length_m is None:
+            continue
+        kind = s.metadata.get("shipType")
+        what = f"{s.name}: {s.length_m:g} m" + (f", {kind}" if isinstance(kind, str) else "")
+        if i == 0:
+            out.append(f"{what} -> {s.vessel or DEFAULT_VESSEL} (own ship: the table's vessel)")
+        else:
+            hull, why = closest_vessel(s.length_m, kind)
+            if hull != (s.vessel or DEFAULT_VESSEL):
+                why = "lengths in the own ship's length: every ship the KCS, Froude-scaled"
+            out.append(f"{what} -> {s.vessel or DEFAULT_VESSEL} ({why})")
+    return out
+
+
 def load_traffic_situation(path, **kw) -> tuple[Scenario, LocalPlane, float]:
     """Read a maritime-schema JSON file; see :func:`traffic_situation_to_scenario` for ``kw`` and the result.
 
-    A missing file, invalid JSON or a malformed situation raise a :class:`~mmg_casadi.errors.ScenarioError`.
+    A missing file, invalid JSON or a malformed situation raise a :class:`~mmg_casadi.errors.ScenarioError`. A
+    GeoJSON file next to it with the same stem (``situation.json`` → ``situation.geojson``), if there is one, is
+    read as land (:mod:`mmg_casadi.scenarios.geojson_land`).
 
     Parameters
     ----------
@@ -429,5 +496,8 @@ def load_traffic_situation(path, **kw) -> tuple[Scenario, LocalPlane, float]:
         data = json.loads(text)
     except (ValueError, RecursionError) as err:
         raise ScenarioError("json", f"valid JSON in {path}", str(err)) from None
+    chart = path.with_suffix(".geojson")
+    if chart.is_file():
+        kw = {**kw, "land": read_geojson(chart, str(chart)), "land_source": chart.name}
     return traffic_situation_to_scenario(data, source=str(path), **kw)
 

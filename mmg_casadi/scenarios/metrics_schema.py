@@ -80,12 +80,13 @@ def metrics_schema() -> dict:
     from mmg_casadi.colregs.score import RULES as LEGACY_RULES
     from mmg_casadi.colregs.verdict import RULES
     from mmg_casadi.guidance.hazards import KINDS
+    from mmg_casadi.closed_loop.replay import REPLAY
     from mmg_casadi.guidance.methods import METHODS
     from mmg_casadi.params import PARAMETERS
 
     ship = _obj({
         "name": {"type": "string"},
-        "method": _enum(METHODS),
+        "method": _enum([*METHODS, REPLAY]),
         "status": _enum(OUTCOMES),
         "reached_goal": {"type": "boolean"},
         "time_to_goal": _NUM,
@@ -99,6 +100,12 @@ def metrics_schema() -> dict:
         "min_distance": _NUM,
         "stalled_at": _POINT,
         "reactive_time": {"type": "number"},
+        "rule9": {"oneOf": [{"type": "null"}, _obj({
+            "verdict": {"type": "boolean"}, "score": {"type": "number", "minimum": 0, "maximum": 1},
+            "channel_time": {"type": "number"}, "starboard_time": {"type": "number"},
+            "share": {"type": "number", "minimum": 0, "maximum": 1}, "mean_offset": {"type": "number"},
+            "min_width": {"type": "number"}},
+            description="COLREG Rule 9(a) in a narrow channel (mmg_casadi.colregs.narrow_channel.rule9)")]},
         "min_speed": _NUM,
         "reduced_speed_time": {"type": "number"},
         "delay": _NUM,
@@ -181,6 +188,11 @@ def metrics_schema() -> dict:
 def schema_text() -> str:
     """:func:`metrics_schema` as the text of the packaged file (indented JSON, one trailing newline).
 
+    Returns
+    -------
+    str
+        The JSON text.
+
     Examples
     --------
     >>> schema_text().startswith('{')
@@ -191,6 +203,11 @@ def schema_text() -> str:
 
 def load_metrics_schema() -> dict:
     """The schema shipped in ``mmg_casadi/data/metrics.schema.json``.
+
+    Returns
+    -------
+    dict
+        The parsed JSON Schema.
 
     Examples
     --------

@@ -9,7 +9,8 @@
                 "collision_kind": "ship"|"obstacle"|"wall"|"land"|null, "collision_position": [x, y]|null,
                 "min_speed": float,
                 "reduced_speed_time": float, "delay": float|null,
-                "min_distance": float, "stalled_at": [x, y]|null, "reactive_time": float}],
+                "min_distance": float, "stalled_at": [x, y]|null, "reactive_time": float,
+                "rule9": {"verdict", "score", "channel_time", ...}|null}],
      "pairs": [{"a", "b", "min_distance", "t_min", "encounter", "compliant",
                 "encounter_b", "compliant_b", "t_enter", "rules",
                 "encounters": {"a": [Encounter.to_dict()], "b": [Encounter.to_dict()]}}]}
@@ -23,6 +24,10 @@ risk of collision (``applicable``, ``onset``, ``release``, ``closest``, ``encoun
 ``applicable: false`` if the side never had a risk of collision. A ship's duties towards several ships are judged
 together over every ship it is paired with (all of them; in a fleet scenario those that came within R_safe), so
 conflicting duties (Rule 2(b)) are flagged.
+
+``rule9`` is the ship's COLREG Rule 9(a) verdict in a narrow channel (:mod:`mmg_casadi.colregs.narrow_channel`):
+the share of her time in a narrow channel (walls or land on both sides across her track, at most 20 L apart)
+spent on the starboard side of its centre line, kept at 90 %; ``null`` for a ship never in a narrow channel.
 
 ``collision_kind`` ``"land"`` is a grounding (the ship touched an edge of a land polygon ``land<k>``);
 ``collision_position`` is where the ship was at its first collision or grounding.
@@ -48,13 +53,16 @@ from scipy.spatial import cKDTree
 
 from mmg_casadi.closed_loop.outcome import ship_outcomes
 from mmg_casadi.closed_loop.problem import build_problem
+from mmg_casadi.closed_loop.replay import REPLAY
 from mmg_casadi.closed_loop.simulation import Trajectory, simulate
 from mmg_casadi.colregs.assess import assess_pair
 from mmg_casadi.colregs.classify import get_profile
+from mmg_casadi.colregs.narrow_channel import rule9
 from mmg_casadi.colregs.scorer import score_encounters
 from mmg_casadi.errors import InputError
-from mmg_casadi.io import json_safe, write_json
+from mmg_casadi.io import json_safe, staged_directory, write_json
 from mmg_casadi.scenarios.scenario import Scenario, load_scenario, with_method
+from mmg_casadi.vessel.library import pair_collision_distance, ship_size
 
 
 @dataclass
@@ -84,7 +92,13 @@ class ScenarioResult:
         return self.metrics["params"]
 
     def names(self) -> list[str]:
-        """Ship names, own ship first."""
+        """Ship names, own ship first.
+
+        Returns
+        -------
+        list of str
+            The ``name`` of each ship in scenario order.
+        """
         return [s.name for s in self.scenario.ships]
 
     def plot(self, ax=None):
@@ -95,6 +109,11 @@ class ScenarioResult:
         ax : matplotlib Axes, optional
             Draw the ships' paths (marine view) into ``ax``; without it a new figure with paths, rudder and
             distance panels (as ``simulate`` saves) is made.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The new figure, or the figure of ``ax``.
         """
         from mmg_casadi.plotting import plot_paths, plot_scenario  # matplotlib: only when drawing
         if ax is None:
@@ -103,12 +122,24 @@ class ScenarioResult:
         return ax.figure
 
     def to_pandas(self):
-        """The per-ship metrics as a pandas DataFrame, one row per ship (index: ship name)."""
+        """The per-ship metrics as a pandas DataFrame, one row per ship (index: ship name).
+
+        Returns
+        -------
+        pandas.DataFrame
+            The entries of ``metrics["ships"]`` except ``stalled_at``, indexed by ship name.
+        """
         rows = [{k: v for k, v in s.items() if k != "stalled_at"} for s in self.metrics["ships"]]
         return pd.DataFrame(rows).set_index("name")
 
     def to_frame(self):
-        """Alias of :meth:`to_pandas` (the name of 0.2; kept for one release)."""
+        """Alias of :meth:`to_pandas` (the name of 0.2; kept for one release).
+
+        Returns
+        -------
+        pandas.DataFrame
+            As :meth:`to_pandas`.
+        """
         return self.to_pandas()
 
     def save(self, out, *, tracking: bool = False) -> Path:
@@ -121,13 +152,25 @@ class ScenarioResult:
             Output directory (created).
         tracking : bool
             Draw the waypoint-tracking figure instead of the encounter figure.
+
+        Returns
+        -------
+        pathlib.Path
+            The output directory.
         """
         write_outputs(self, out, tracking=tracking)
         return Path(out)
 
     def pair_distances(self) -> dict:
         """Distance histories ``{(a, b): d(t)}`` for every ship pair and ship–obstacle pair (NaN while a ship is
-        not sailing); in a fleet scenario (the fleet step) only for the pairs that came within R_safe."""
+        not sailing); in a fleet scenario (the fleet step) only for the pairs that came within R_safe.
+
+        Returns
+        -------
+        dict
+            ``(name_a, name_b)`` (``"obstacle<k>"`` for an obstacle) to a ``numpy.ndarray (T+1,)`` of distances (L) at
+            the trajectory's times.
+        """
         tr = self.trajectory
         mask = tr.sailing_mask()
         names = self.names()
@@ -143,7 +186,13 @@ class ScenarioResult:
         return out
 
     def own_distance(self) -> np.ndarray:
-        """Distance from the own ship to its nearest other agent over time."""
+        """Distance from the own ship to its nearest other agent over time.
+
+        Returns
+        -------
+        numpy.ndarray (T+1,)
+            Distance (L) at the trajectory's times; ``inf`` where no other agent is present.
+        """
         own = self.names()[0]
         ds = [d for (a, b), d in self.pair_distances().items() if a == own or b == own]
         if not ds:
@@ -198,6 +247,11 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
 def packaged_names() -> list[str]:
     """Names of the scenarios shipped in ``mmg_casadi/data/scenarios/`` (file names without ``.toml``), sorted.
 
+    Returns
+    -------
+    list of str
+        Scenario names, sorted.
+
     Examples
     --------
     >>> "head_on" in packaged_names()
@@ -214,6 +268,12 @@ def packaged_scenarios() -> list[dict]:
     """What ``mmg-casadi scenarios`` lists: per shipped scenario its ``name``, number of ``ships`` and of
     ``obstacles``, ``method`` (``settings.method``, followed by the ships that override it) and ``description``
     (the first line of the file's header comment up to its first comma; ``""`` without one).
+
+    Returns
+    -------
+    list of dict
+        One dict per scenario, in name order, with keys ``name``, ``ships``, ``obstacles``, ``method`` and
+        ``description``.
 
     Examples
     --------
@@ -242,6 +302,11 @@ def packaged_scenario(name: str) -> Scenario:
     name : str
         File name without ``.toml``.
 
+    Returns
+    -------
+    Scenario
+        The validated scenario.
+
     Examples
     --------
     >>> [s.name for s in packaged_scenario("crossing").ships]
@@ -267,6 +332,12 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     profile : ColregProfile or str, optional
         Legacy COLREG threshold profile or its name (:data:`mmg_casadi.colregs.classify.PROFILES`; default: the
         paper laboratory's); the ``encounters`` of every pair use ``params["colregs_profile"]`` instead.
+
+    Returns
+    -------
+    ScenarioResult
+        The scenario, the trajectory, the ``metrics`` (``method``, ``collision``, ``t_end`` in L/U, ``params``,
+        per-ship ``ships`` and per-pair ``pairs``) and the encounter labels of the figures.
     """
     profile = get_profile(profile)
     g = {k: params[k] for k in ("r_safe", "collision_distance")}
@@ -279,11 +350,12 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     mask = traj.sailing_mask()
     t_end = float(traj.t[-1])
     final = np.concatenate([[t_end], traj.final.ravel()])
+    banks = scenario_segments(sc)
     ships = []
     for i, (s, o) in enumerate(zip(sc.ships, ship_outcomes(traj.layout, final, params))):
         ships.append({
             "name": s.name,
-            "method": traj.layout.methods[i],
+            "method": REPLAY if i in traj.layout.replay else traj.layout.methods[i],
             "status": o["status"],
             "reached_goal": o["status"] == "reached",
             "time_to_goal": o["time_to_goal"],
@@ -297,7 +369,9 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
             "min_distance": o["min_distance"],
             "stalled_at": None if o["stalled_at"] is None else list(o["stalled_at"]),
             "reactive_time": o["reactive_time"],
-            **_speed_metrics(s, traj, i, mask[:, i], o["time_to_goal"], params["goal_tolerance"]),
+            "rule9": _rule9(traj, i, mask[:, i], banks),
+            **(_speed_metrics(s, traj, i, mask[:, i], o["time_to_goal"], params["goal_tolerance"])
+               if getattr(s, "track", None) is None else _replay_speed_metrics(traj, i, mask[:, i])),
         })
     pairs = []
     labels: dict = {}
@@ -309,12 +383,16 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     for i, k in obstacle_pairs:
         obstacles_of[i].append(k)
     judged = _encounters(traj, mask, names, ship_pairs, params["colregs_profile"])
+    lengths = [ship_size(s.vessel or params["vessel"], s.length_m, unit=sc.ships[0].vessel or params["vessel"])[0]
+               for s in sc.ships]
     for i in range(N):
         pi = np.column_stack([traj.state("x", i), traj.state("y", i)])
         for j in partners[i]:
             pj = np.column_stack([traj.state("x", j), traj.state("y", j)])
             a = assess_pair(traj.t, pi, traj.state("psi", i), pj, traj.state("psi", j),
-                            r_safe=g["r_safe"], collision_distance=g["collision_distance"],
+                            r_safe=g["r_safe"],
+                            collision_distance=pair_collision_distance(g["collision_distance"], lengths[i],
+                                                                       lengths[j]),
                             profile=profile, active_a=mask[:, i], active_b=mask[:, j])
             pairs.append({"a": names[i], "b": names[j], "min_distance": float(a.min_distance),
                           "t_min": float(a.t_min), "encounter": a.encounter, "compliant": a.compliant,
@@ -337,6 +415,29 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     metrics = {"method": sc.settings.method, "collision": bool(collision), "t_end": t_end,
                "params": dict(params), "ships": ships, "pairs": pairs}
     return ScenarioResult(sc, traj, json_safe(metrics), labels)
+
+
+def scenario_segments(sc) -> list:
+    """Every wall segment and land edge of a scenario, as pairs of end points (L).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    list of ((ax, ay), (bx, by))
+        Walls first, then land edges, in the order of the closed loop's wall segments.
+    """
+    return [seg for w in sc.walls for seg in w.segments] + [e for land in sc.land for e in land.edges]
+
+
+def _rule9(traj: Trajectory, i: int, active, banks: list):
+    """Ship ``i``'s Rule 9(a) verdict (:func:`mmg_casadi.colregs.narrow_channel.rule9`) as a dict, or None."""
+    xy = np.column_stack([traj.state("x", i), traj.state("y", i)])
+    r = rule9(traj.t, xy, traj.state("psi", i), active, banks)
+    return None if r is None else r.to_dict()
 
 
 def _encounters(traj: Trajectory, mask: np.ndarray, names: list, ship_pairs: list, profile: str) -> dict:
@@ -391,6 +492,14 @@ def _speed_metrics(ship, traj: Trajectory, i: int, sailing: np.ndarray, time_to_
             "delay": None if time_to_goal is None else float(time_to_goal) - voyage}
 
 
+def _replay_speed_metrics(traj: Trajectory, i: int, sailing: np.ndarray) -> dict:
+    """A replayed ship's ``min_speed`` (U, over the ground, from its track while it sails); it has no planned
+    speed or voyage, so ``reduced_speed_time`` is 0 and ``delay`` null."""
+    speed = np.hypot(traj.state("u", i), traj.state("v", i))
+    return {"min_speed": float(np.min(speed[sailing])) if sailing.any() else None, "reduced_speed_time": 0.0,
+            "delay": None}
+
+
 def _pairs(sc, traj: Trajectory, mask: np.ndarray, r_safe: float) -> tuple[list, list]:
     """The ship pairs ``(i, j)``, ``i < j``, and ship–obstacle pairs ``(i, k)`` a result reports: all of them, or in
     a fleet scenario (the fleet step) those that came within ``r_safe`` while sailing (a k-d tree per sample)."""
@@ -414,7 +523,9 @@ def _pairs(sc, traj: Trajectory, mask: np.ndarray, r_safe: float) -> tuple[list,
 
 
 def write_outputs(res: ScenarioResult, out, *, figure_name: str = "scenario.png", tracking: bool = False) -> None:
-    """Write ``trajectory.npz``, ``trajectory.csv``, ``metrics.json`` and the figure into ``out``.
+    """Write ``trajectory.npz``, ``trajectory.csv``, ``metrics.json`` and the figure into ``out``, all or none:
+    they are written into a hidden sibling folder first and moved into ``out`` at the end
+    (:func:`~mmg_casadi.io.staged_directory`), so an interruption (Ctrl-C, SIGTERM) leaves no partial file.
 
     Parameters
     ----------
@@ -428,10 +539,9 @@ def write_outputs(res: ScenarioResult, out, *, figure_name: str = "scenario.png"
         Draw the waypoint-tracking figure instead of the encounter figure.
     """
     from mmg_casadi.plotting import plot_fleet, plot_scenario, plot_tracking  # matplotlib: only when writing
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    res.trajectory.to_npz(out / "trajectory.npz")
-    res.trajectory.to_csv(out / "trajectory.csv", names=res.names())
-    figure = plot_tracking if tracking else plot_fleet if res.trajectory.layout.neighbours else plot_scenario
-    figure(res, out / figure_name)
-    write_json(out / "metrics.json", res.metrics)
+    with staged_directory(out) as tmp:
+        res.trajectory.to_npz(tmp / "trajectory.npz")
+        res.trajectory.to_csv(tmp / "trajectory.csv", names=res.names())
+        figure = plot_tracking if tracking else plot_fleet if res.trajectory.layout.neighbours else plot_scenario
+        figure(res, tmp / figure_name)
+        write_json(tmp / "metrics.json", res.metrics)

@@ -10,7 +10,7 @@ times non-dimensional (L/U). A scenario file looks like::
     dt = 0.25                    # guidance step
     t_max = 300.0                # horizon
     r_safe = 15.0                # L, safe radius
-    collision_distance = 2.0     # L, ship centres closer than this collide
+    collision_distance = 2.0     # L, ship centres closer than this collide (times the pair's mean length in L)
     [[ships]]                    # the first ship is the own ship
     name = "own"
     start = [0.0, 0.0]
@@ -21,8 +21,10 @@ times non-dimensional (L/U). A scenario file looks like::
     # stays = false              # optional: after reaching its goal the ship stays as an obstacle
     # vessel = "kcs"             # optional: the ship's hull (default the table's 'vessel')
     # speeds = [1.0]             # optional: speed on the leg to each waypoint (default: speed on every leg)
-    # length_m = 122.0           # optional: the ship's own length and beam in metres, kept as data (a file's
-    # beam_m = 20.0              #   length unit L is the hull's; these do not change the simulation)
+    # track = "target.csv"       # a target only, instead of start ... speeds and method: it replays this
+                                 #   recorded track (t, x, y) in time (mmg_casadi.scenarios.tracks)
+    # length_m = 122.0           # optional: the ship's own length and beam in metres (default: its vessel's);
+    # beam_m = 20.0              #   its collision geometry (the length unit L stays the default hull's, 230 m)
     # [ships.metadata]           # optional: further static data kept as is (maritime-schema names), e.g.
     # id = 7                     #   id, mmsi, imo, shipType, sogMax, dimensions.height; written back on export
     [[obstacles]]
@@ -33,6 +35,9 @@ times non-dimensional (L/U). A scenario file looks like::
     [[land]]
     points = [[60.0, -5.0], [70.0, -5.0], [65.0, 5.0]]  # polygon (closed), at least 3 points; no ship starts
                                                         # or waypoint inside; touching it is a grounding
+    # [chart]                    # optional: land from a GeoJSON file (mmg_casadi.scenarios.geojson_land)
+    # land_file = "coast.geojson"  #   Polygon/MultiPolygon features (lon, lat), relative to this file's folder
+    # origin = [58.61, 10.59]    #   latitude, longitude of the frame's (0, 0); length_m = 230.0 per L (optional)
     [environment]                # optional; calm water without it
     current_speed = 0.1          # fraction of design speed, [0, 1]
     current_direction = 90.0     # degrees, the direction the current flows TOWARDS
@@ -68,10 +73,13 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
-from mmg_casadi.vessel.library import VESSELS
+from mmg_casadi.vessel.library import VESSELS, pair_collision_distance, ship_size
 from mmg_casadi.guidance import methods
 from mmg_casadi.errors import ParameterError, ScenarioError, check_range
 from mmg_casadi.io import read_toml
+from mmg_casadi.scenarios.geodesy import read_header
+from mmg_casadi.scenarios.geojson_land import chart_land
+from mmg_casadi.scenarios.tracks import Track, parse_track
 from mmg_casadi.params import PARAMETERS, check_value, resolve
 
 SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_tolerance")
@@ -80,11 +88,13 @@ PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
 """Table parameters kept in :attr:`Settings.params`."""
 SETTINGS_KEYS = ("method",) + tuple(PARAMETERS)
 SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays", "vessel", "speeds", "length_m",
-             "beam_m", "metadata")
+             "beam_m", "metadata", "track")
+REPLAY_KEYS = ("name", "track", "stays", "vessel", "length_m", "beam_m", "metadata")
+"""Keys of a replayed ship (one with a ``track``): its start, heading, speed and goal come from the track."""
 OBSTACLE_KEYS = ("position", "radius")
 WALL_KEYS = ("points",)
 LAND_KEYS = ("points",)
-TOP_KEYS = ("settings", "ships", "obstacles", "walls", "land", "environment")
+TOP_KEYS = ("settings", "ships", "obstacles", "walls", "land", "environment", "chart")
 ENVIRONMENT_KEYS = {"current_speed": "current_speed", "current_direction": "current_direction_deg",
                     "wind_speed": "wind_speed", "wind_direction": "wind_direction_deg",
                     "crab_compensation": "crab_compensation"}
@@ -160,6 +170,11 @@ class Settings:
         cls : type, default ParameterError
             Exception class raised for an invalid value.
 
+        Returns
+        -------
+        dict
+            Every parameter of :data:`~mmg_casadi.params.PARAMETERS` by table name, in table units.
+
         Examples
         --------
         >>> Settings("none", r_safe=10.0).resolved({"kp": 2.0})["r_safe"]
@@ -198,13 +213,19 @@ class ShipSpec:
         Speed on the leg to each waypoint (fractions of the design speed); ``None``: ``speed`` on every leg. The
         closed loop orders the propeller speed of each leg's steady speed, which the engine follows.
     length_m, beam_m : float or None, optional
-        The ship's own length and beam [m], as an imported traffic situation gives them (> 0). Data only: the
-        simulation draws every ship as the hull of length L, the scenario's length unit.
+        The ship's own length and beam [m], as an imported traffic situation gives them (> 0); default its
+        vessel's. They set its collision geometry (:func:`~mmg_casadi.vessel.library.ship_size`): it collides
+        with another ship within ``collision_distance`` times their mean length (in L, the default hull's length,
+        the scenario's unit) and touches a wall or land at half its beam. Its motion is still its vessel's.
     metadata : dict, optional
         Further static data kept as read and written back on export (JSON-compatible values, see
         :func:`check_metadata`): for a maritime-schema ship its ``static`` object without ``name`` and the
         length and width, e.g. ``id``, ``mmsi``, ``shipType``, ``sogMax``, ``dimensions.height``. Left out of the
         hash.
+    track : Track or None, optional
+        A replayed ship's recorded track (:mod:`mmg_casadi.scenarios.tracks`): it follows the track instead of
+        being simulated, and ``start``, ``heading_deg``, ``speed`` and ``waypoints`` (its last position) are the
+        track's at t = 0; ``None`` for a simulated ship.
 
     Examples
     --------
@@ -225,6 +246,7 @@ class ShipSpec:
     length_m: float | None = None
     beam_m: float | None = None
     metadata: dict = field(default_factory=dict, hash=False)
+    track: Track | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "start", _as_point(self.start))
@@ -388,6 +410,11 @@ class Scenario:
         ----------
         i : int
             Ship index (0 is the own ship).
+
+        Returns
+        -------
+        str
+            A name of :data:`~mmg_casadi.guidance.methods.METHODS`.
         """
         own = self.ships[i].method
         return self.settings.method if own is None else own
@@ -597,8 +624,10 @@ def check_metadata(value, key: str, *, drop_nulls: bool = False) -> dict:
         raise ScenarioError(key, "tables and arrays nested less deeply (Python's recursion limit)") from None
 
 
-def _ship(t: dict, i: int) -> ShipSpec:
-    """Validated ``ships[i]`` table."""
+def _ship(t: dict, i: int, base_dir=None) -> ShipSpec:
+    """Validated ``ships[i]`` table (a replayed ship's track file relative to ``base_dir``)."""
+    if "track" in t:
+        return _replayed_ship(t, i, base_dir)
     p = f"ships[{i}]"
     name = _string(t["name"], f"{p}.name") if "name" in t else f"ship{i}"
     start = _point(_required(t, "start", p, _POINT), f"{p}.start")
@@ -625,6 +654,30 @@ def _ship(t: dict, i: int) -> ShipSpec:
     metadata = check_metadata(t["metadata"], f"{p}.metadata") if "metadata" in t else {}
     return ShipSpec(name, start, heading, speed, waypoints, method, stays, vessel, speeds, metadata=metadata,
                     **size)
+
+
+def _replayed_ship(t: dict, i: int, base_dir=None) -> ShipSpec:
+    """Validated ``ships[i]`` table of a replayed ship: its track and static data (:data:`REPLAY_KEYS`)."""
+    p = f"ships[{i}]"
+    if i == 0:
+        raise ScenarioError(f"{p}.track", "no track for the own ship (the first ship sails with a method; "
+                            "replayed ships are targets)", t["track"] if isinstance(t["track"], str) else None)
+    for k in t:
+        if k not in REPLAY_KEYS:
+            raise ScenarioError(f"{p}.{toml_key(k)}", f"a key of a replayed ship (one of: {', '.join(REPLAY_KEYS)}; "
+                                "the track gives its start, heading, speed and goal)")
+    track = parse_track(t["track"], f"{p}.track", base_dir)
+    name = _string(t["name"], f"{p}.name") if "name" in t else f"ship{i}"
+    stays = t.get("stays", False)
+    if not isinstance(stays, bool):
+        raise ScenarioError(f"{p}.stays", "true or false", stays)
+    vessel = _string(t["vessel"], f"{p}.vessel", VESSELS) if "vessel" in t else None
+    size = {k: _ranged(t[k], f"{p}.{k}", 0.0, None, low_open=True, unit="m") for k in ("length_m", "beam_m")
+            if k in t}
+    metadata = check_metadata(t["metadata"], f"{p}.metadata") if "metadata" in t else {}
+    end = (track.x[-1], track.y[-1])
+    return ShipSpec(name, tuple(track.position(0.0)), math.degrees(track.heading(0.0)), track.speed(0.0), (end,),
+                    None, stays, vessel, None, metadata=metadata, track=track, **size)
 
 
 def _obstacle(t: dict, i: int) -> ObstacleSpec:
@@ -673,8 +726,12 @@ def _check_water(ships, land) -> None:
                                         "goes through water)", list(wp))
 
 
-def _check_starts(ships, obstacles, collision_distance: float) -> None:
-    """Ship starts must lie outside every obstacle (radius + half a ship length) and apart from each other."""
+def _check_starts(ships, obstacles, collision_distance: float, vessel: str | None = None) -> None:
+    """Ship starts must lie outside every obstacle (radius + half a ship length) and apart from each other: two
+    ships at least their collision distance (``collision_distance`` times their mean length,
+    :func:`~mmg_casadi.vessel.library.pair_collision_distance`; each ship's length its own ``length_m`` or its
+    vessel's, ``vessel`` for a ship that names none)."""
+    lengths = [ship_size(s.vessel or vessel, s.length_m, unit=ships[0].vessel or vessel)[0] for s in ships]
     names = {}
     for i, ship in enumerate(ships):
         if ship.name in names:
@@ -687,12 +744,16 @@ def _check_starts(ships, obstacles, collision_distance: float) -> None:
                 raise ScenarioError(f"ships[{i}].start", f"a start at least {limit:g} L (radius + 0.5 L) from "
                                     f"the centre of obstacles[{j}], not inside it", list(ship.start))
         for j in range(i):
-            if math.dist(ship.start, ships[j].start) < collision_distance:
-                raise ScenarioError(f"ships[{i}].start", f"a start at least collision_distance = "
-                                    f"{collision_distance:g} L from ships[{j}].start", list(ship.start))
+            limit = pair_collision_distance(collision_distance, lengths[i], lengths[j])
+            if math.dist(ship.start, ships[j].start) < limit:
+                what = (f"collision_distance = {collision_distance:g} L" if limit == collision_distance else
+                        f"{limit:g} L (collision_distance = {collision_distance:g} L times the two ships' mean "
+                        "length)")
+                raise ScenarioError(f"ships[{i}].start", f"a start at least {what} from ships[{j}].start",
+                                    list(ship.start))
 
 
-def scenario_from_dict(d: dict, source: str = "<dict>") -> Scenario:
+def scenario_from_dict(d: dict, source: str = "<dict>", base_dir=None, reference=None) -> Scenario:
     """A validated :class:`Scenario` from a dict shaped like a scenario file.
 
     ``source`` (a file name) is stored as the ``source`` attribute of any :class:`ScenarioError` raised.
@@ -703,6 +764,17 @@ def scenario_from_dict(d: dict, source: str = "<dict>") -> Scenario:
         Scenario data shaped like a scenario file.
     source : str, default '<dict>'
         Name of the source (a file name) stored in any :class:`ScenarioError` raised.
+    base_dir : str or Path, optional
+        Folder that a replayed ship's relative ``track`` file name and a ``[chart]`` table's ``land_file`` are
+        relative to (default the working directory).
+    reference : (float, float, float), optional
+        The scenario's geographic origin (latitude, longitude in deg, metres per L), e.g. from the header of a
+        converted scenario: a ``[chart]`` table without ``origin`` uses it.
+
+    Returns
+    -------
+    Scenario
+        The validated scenario.
 
     Examples
     --------
@@ -719,12 +791,16 @@ def scenario_from_dict(d: dict, source: str = "<dict>") -> Scenario:
     try:
         table = _table(d, "", TOP_KEYS)
         settings = _settings(table)
-        ships = tuple(_ship(t, i) for i, t in enumerate(_tables(table, "ships", SHIP_KEYS, required=True)))
+        ships = tuple(_ship(t, i, base_dir) for i, t in
+                      enumerate(_tables(table, "ships", SHIP_KEYS, required=True)))
         obstacles = tuple(_obstacle(t, i) for i, t in
                           enumerate(_tables(table, "obstacles", OBSTACLE_KEYS, required=False)))
         walls = tuple(_wall(t, i) for i, t in enumerate(_tables(table, "walls", WALL_KEYS, required=False)))
         land = tuple(_land(t, i) for i, t in enumerate(_tables(table, "land", LAND_KEYS, required=False)))
-        _check_starts(ships, obstacles, settings.collision_distance)
+        if "chart" in table:  # land from a GeoJSON file, after the inline polygons
+            land += tuple(_land({"points": [list(p) for p in poly]}, len(land) + k)
+                          for k, poly in enumerate(chart_land(table["chart"], base_dir, reference)))
+        _check_starts(ships, obstacles, settings.collision_distance, settings.params.get("vessel"))
         _check_water(ships, land)
     except ScenarioError as err:
         err.source = source
@@ -740,6 +816,11 @@ def load_scenario(path) -> Scenario:
     path : str or Path
         The file (see the module docstring for its keys).
 
+    Returns
+    -------
+    Scenario
+        The validated scenario.
+
     Raises
     ------
     ScenarioError
@@ -753,7 +834,9 @@ def load_scenario(path) -> Scenario:
     >>> [ship.start for ship in s.ships]
     [(0.0, 0.0), (50.0, 0.0)]
     """
-    return scenario_from_dict(read_toml(path, "scenario", ScenarioError), source=str(path))
+    data = read_toml(path, "scenario", ScenarioError)
+    reference = read_header(Path(str(path)).read_text(encoding="utf-8")) if "chart" in data else None
+    return scenario_from_dict(data, source=str(path), base_dir=Path(str(path)).parent, reference=reference)
 
 
 def with_method(s: Scenario, method: str) -> Scenario:
@@ -765,6 +848,11 @@ def with_method(s: Scenario, method: str) -> Scenario:
         The scenario.
     method : str
         Name of the new scenario-wide method.
+
+    Returns
+    -------
+    Scenario
+        A new scenario; ``s`` is not changed.
 
     Examples
     --------
@@ -786,6 +874,11 @@ def with_params(s: Scenario, params: dict | None) -> Scenario:
     params : dict or None
         Parameter values (table names) to write into the settings; ``None`` or empty returns ``s``.
 
+    Returns
+    -------
+    Scenario
+        A new scenario with the values checked and written into ``settings`` (``s`` itself if ``params`` is empty).
+
     Examples
     --------
     >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
@@ -802,7 +895,13 @@ def with_params(s: Scenario, params: dict | None) -> Scenario:
 
 
 def _ship_dict(ship: ShipSpec) -> dict:
-    """One ship as a scenario-file table."""
+    """One ship as a scenario-file table (a replayed ship with its track inline)."""
+    if ship.track is not None:
+        d = {"name": ship.name, "track": ship.track.to_dict(), "stays": ship.stays}
+        d.update({k: getattr(ship, k) for k in ("vessel", "length_m", "beam_m") if getattr(ship, k) is not None})
+        if ship.metadata:
+            d["metadata"] = copy.deepcopy(ship.metadata)
+        return d
     d = {"name": ship.name, "start": list(ship.start), "heading": ship.heading_deg, "speed": ship.speed,
          "waypoints": [list(p) for p in ship.waypoints]}
     if ship.method is not None:
@@ -827,6 +926,11 @@ def scenario_to_dict(s: Scenario) -> dict:
     ----------
     s : Scenario
         The scenario to convert.
+
+    Returns
+    -------
+    dict
+        ``settings``, ``ships``, ``obstacles``, ``walls`` and ``land`` as plain lists, dicts and numbers.
 
     Examples
     --------
@@ -858,6 +962,11 @@ def dump_scenario(s: Scenario) -> str:
     ----------
     s : Scenario
         The scenario to write.
+
+    Returns
+    -------
+    str
+        TOML text of a scenario file.
 
     Examples
     --------

@@ -14,6 +14,11 @@ def saturate(x, limit):
         Value to clip.
     limit : float or casadi.SX or casadi.MX
         Non-negative bound of the symmetric interval.
+
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        ``x`` clipped to ``[-limit, limit]``.
     """
     return ca.fmin(ca.fmax(x, -limit), limit)
 
@@ -36,6 +41,11 @@ def steering_rate(delta, delta_c, T_delta, rate_max, delta_max):
         Maximum rudder rate (rad per unit time L/U).
     delta_max : float
         Rudder-angle saturation (rad).
+
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        Rudder rate δ̇ (rad per unit time L/U), within ±``rate_max``.
 
     Examples
     --------
@@ -67,6 +77,11 @@ def engine_step(n, n_c, rate_max, dt, lag=0.0):
         Guidance step (L/U).
     lag : float or casadi.SX or casadi.MX, default 0
         Time constant of the engine's first-order response (L/U).
+
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        Propeller speed at the end of the step (rev/min).
 
     Examples
     --------

@@ -136,6 +136,11 @@ class Environment:
             Direction the true wind comes from (rad).
         U_design : float, optional
             Design speed used for the scaling (m/s).
+
+        Returns
+        -------
+        Environment
+            Speeds in U_des units, directions (rad) unchanged.
         """
         return cls(current_speed / U_design, current_direction, wind_speed / U_design, wind_direction)
 
@@ -145,7 +150,14 @@ class Environment:
         return self.current_speed == 0.0 and self.wind_speed == 0.0
 
     def vector(self) -> np.ndarray:
-        """The Function input ``env = [V_c, beta_c, U_w, psi_w]``."""
+        """The Function input ``env = [V_c, beta_c, U_w, psi_w]``.
+
+        Returns
+        -------
+        numpy.ndarray (4,)
+            ``[V_c, beta_c, U_w, psi_w]``: current speed (U_des units), direction it flows towards (rad), true
+            wind speed (U_des units), direction the wind comes from (rad).
+        """
         return np.array([self.current_speed, self.current_direction, self.wind_speed, self.wind_direction])
 
 
@@ -255,6 +267,11 @@ class Windage:
             Breadth (m).
         freeboard : float, optional
             Freeboard height above the waterline (m).
+
+        Returns
+        -------
+        Windage
+            ``A_F = B freeboard``, ``A_L = L freeboard`` (m²), ``s_L = 0`` and ``L_oa = L`` (m).
         """
         return cls(A_F=B * freeboard, A_L=L * freeboard, s_L=0.0, L_oa=L)
 
@@ -270,6 +287,13 @@ def current_body(V_c, beta_c, psi):
         Direction the current flows towards (rad).
     psi : float or casadi.SX or casadi.MX
         Heading ψ (rad).
+
+    Returns
+    -------
+    u_c : float or casadi.SX or casadi.MX
+        Current velocity along the ship's x axis (U_des units).
+    v_c : float or casadi.SX or casadi.MX
+        Current velocity along the ship's y axis (U_des units).
 
     Examples
     --------
@@ -295,6 +319,13 @@ def ground_velocity(u_r, v_r, psi, V_c, beta_c):
         Current speed (U_des units).
     beta_c : float or casadi.SX or casadi.MX
         Direction the current flows towards (rad).
+
+    Returns
+    -------
+    u_g : float or casadi.SX or casadi.MX
+        Surge velocity over the ground (U_des units).
+    v_g : float or casadi.SX or casadi.MX
+        Sway velocity over the ground (U_des units).
 
     Examples
     --------
@@ -322,6 +353,13 @@ def velocity_over_ground(u_r, v_r, psi, V_c, beta_c):
     beta_c : float or casadi.SX or casadi.MX
         Direction the current flows towards (rad).
 
+    Returns
+    -------
+    x_dot : float or casadi.SX or casadi.MX
+        Earth-fixed x velocity over the ground (L per L/U, i.e. U_des units).
+    y_dot : float or casadi.SX or casadi.MX
+        Earth-fixed y velocity over the ground (U_des units).
+
     Examples
     --------
     >>> [round(float(c), 12) for c in velocity_over_ground(1.0, 0.0, math.pi / 2, 0.1, math.pi / 2)]
@@ -340,6 +378,13 @@ def current_kinematics(V_c, beta_c):
         Current speed (U_des units).
     beta_c : float or casadi.SX or casadi.MX
         Direction the current flows towards (rad).
+
+    Returns
+    -------
+    x_dot : float or casadi.SX or casadi.MX
+        Earth-fixed x component of the current, ``V_c cos(beta_c)`` (U_des units).
+    y_dot : float or casadi.SX or casadi.MX
+        Earth-fixed y component of the current, ``V_c sin(beta_c)`` (U_des units).
 
     Examples
     --------
@@ -365,6 +410,13 @@ def apparent_wind(u_g, v_g, psi, U_w, psi_w):
         True wind speed (U_des units).
     psi_w : float or casadi.SX or casadi.MX
         Direction the true wind comes from (rad).
+
+    Returns
+    -------
+    u_rw : float or casadi.SX or casadi.MX
+        Surge component of the apparent wind in body axes (U_des units).
+    v_rw : float or casadi.SX or casadi.MX
+        Sway component of the apparent wind in body axes (U_des units).
 
     Examples
     --------
@@ -395,6 +447,15 @@ def blendermann_coefficients(gamma, params: BlendermannParams = CONTAINER_SHIP_L
         Lateral projected area (m²).
     s_L_over_Loa : float
         Centroid position of A_L over L_oa (positive forward).
+
+    Returns
+    -------
+    C_X : float or casadi.SX or casadi.MX
+        Longitudinal wind-force coefficient (on A_F, dimensionless).
+    C_Y : float or casadi.SX or casadi.MX
+        Lateral wind-force coefficient (on A_L, dimensionless).
+    C_N : float or casadi.SX or casadi.MX
+        Yaw wind-moment coefficient (on A_L L_oa, about midships, dimensionless).
 
     Examples
     --------
@@ -453,6 +514,15 @@ def wind_forces(ship, windage: Windage, u_g, v_g, psi, U_w, psi_w):
     psi_w : float or casadi.SX or casadi.MX
         Direction the true wind comes from (rad).
 
+    Returns
+    -------
+    X_W : float or casadi.SX or casadi.MX
+        Non-dimensional wind surge force increment X_W' (prime-II).
+    Y_W : float or casadi.SX or casadi.MX
+        Non-dimensional wind sway force increment Y_W' (prime-II).
+    N_W : float or casadi.SX or casadi.MX
+        Non-dimensional wind yaw moment increment N_W' (prime-II).
+
     Examples
     --------
     >>> from mmg_casadi.vessel.ship import load_kcs
@@ -478,6 +548,11 @@ def crab_angle(u_g, v_g):
         Surge velocity over the ground (U_des units).
     v_g : float or casadi.SX or casadi.MX
         Sway velocity over the ground (U_des units).
+
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        Crab angle β_c (rad, in (-π, π]).
 
     Examples
     --------
@@ -512,6 +587,11 @@ def gust_speeds(n_steps: int, dt: float, mean_speed: float, *, intensity: float 
         Correlation time T (L/U_des, > 0).
     seed : int, optional
         Seed of the random generator.
+
+    Returns
+    -------
+    numpy.ndarray (n_steps,)
+        Wind speed ``U_w[k]`` at each step (U_des units, ≥ 0).
 
     Examples
     --------

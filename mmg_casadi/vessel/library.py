@@ -19,6 +19,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass
 from functools import lru_cache
@@ -42,6 +43,50 @@ SOURCES = {
 
 VESSELS: tuple[str, ...] = tuple(_FILES)
 """Names of the vessels in the library."""
+
+HULL_TYPES = {"kcs": "container", "kvlcc2": "tanker"}
+"""The kind of ship each hull stands for, matched against an imported ship type (:func:`closest_vessel`)."""
+
+_TYPE_WORDS = {"container": ("container", "cargo"), "tanker": ("tanker",)}
+"""Words of a ship type (maritime-schema ``shipType``, AIS type names) that name each kind."""
+
+
+def closest_vessel(length_m: float | None, ship_type: str | None = None) -> tuple[str, str]:
+    """The library's hull closest to a ship of length ``length_m`` and type ``ship_type``, and why.
+
+    The hulls of the ship's kind (``ship_type`` containing one of the words of :data:`_TYPE_WORDS`, any case) are
+    the candidates, all hulls if none is of its kind; among them the one whose length is closest on a log scale
+    (ratio, not difference: a 60 m ship is closer to 230 m than to 320 m, and a 400 m one to 320 m).
+
+    Parameters
+    ----------
+    length_m : float or None
+        The ship's length (m, > 0); None: :data:`DEFAULT`.
+    ship_type : str or None, optional
+        Its type as read (e.g. ``"Tanker"``, ``"Cargo"``, ``"Passenger"``).
+
+    Returns
+    -------
+    tuple of str
+        ``(vessel, reason)``: a name of :data:`VESSELS` and a short phrase saying how it was chosen.
+
+    Examples
+    --------
+    >>> closest_vessel(300.0)
+    ('kvlcc2', 'closest length (320 m)')
+    >>> closest_vessel(300.0, "Cargo")
+    ('kcs', 'container hull, closest length (230 m)')
+    >>> closest_vessel(None)
+    ('kcs', 'no length: the default hull')
+    """
+    if length_m is None:
+        return DEFAULT, "no length: the default hull"
+    kind = next((k for k, words in _TYPE_WORDS.items()
+                 if isinstance(ship_type, str) and any(w in ship_type.lower() for w in words)), None)
+    names = [v for v in VESSELS if HULL_TYPES[v] == kind] or list(VESSELS)
+    best = min(names, key=lambda v: (abs(math.log(float(length_m) / load_vessel(v).ship.L)), v != DEFAULT))
+    prefix = f"{kind} hull, " if kind is not None and HULL_TYPES[best] == kind else ""
+    return best, f"{prefix}closest length ({load_vessel(best).ship.L:g} m)"
 
 
 @dataclass(frozen=True)
@@ -70,6 +115,11 @@ def data_path(name: str):
     ----------
     name : str
         A name of :data:`VESSELS`.
+
+    Returns
+    -------
+    importlib.resources.abc.Traversable
+        The TOML file of the vessel inside the installed package.
     """
     return resources.files("mmg_casadi").joinpath("data", _FILES[name])
 
@@ -94,6 +144,11 @@ def load_vessel(name: str | Path = DEFAULT, field: str = "vessel") -> Vessel:
         the vessel's name).
     field : str, default 'vessel'
         Name of the input field, used in the error message.
+
+    Returns
+    -------
+    Vessel
+        The vessel: its name, MMG coefficients and steering gear.
 
     Examples
     --------
@@ -127,6 +182,12 @@ def vessel_table() -> list[dict]:
     ``rpm_design`` is the propeller speed of steady straight running at the design speed, solved from the surge
     balance of the vessel's own model (:func:`~mmg_casadi.vessel.mmg.propeller_rpm_for_speed`).
 
+    Returns
+    -------
+    list of dict
+        One dict per name of :data:`VESSELS`: ``name``, ``L_m``, ``B_m``, ``d_m`` (m), ``U_design_m_s`` (m/s),
+        ``U_design_kn`` (kn), ``Fn``, ``rpm_design`` (rev/min), ``hull_form`` and ``source``.
+
     Examples
     --------
     >>> rows = vessel_table()
@@ -142,3 +203,69 @@ def vessel_table() -> list[dict]:
                      "rpm_design": propeller_rpm_for_speed(1.0, s), "hull_form": s.hull_form,
                      "source": SOURCES[name]})
     return rows
+
+
+def ship_size(vessel: str | Path | None = None, length_m: float | None = None,
+              beam_m: float | None = None, unit: str | Path | None = None) -> tuple[float, float]:
+    """A ship's length and half beam in the scenario's length unit L, for its collision geometry.
+
+    The unit L is the length of the own ship's hull, ``unit`` (:data:`DEFAULT`, the KCS's 230 m, unless the own
+    ship sails another): positions, radii and distances of a scenario are in it. A ship's own ``length_m`` and ``beam_m`` (e.g. read from a traffic
+    situation) win over its vessel's particulars.
+
+    Parameters
+    ----------
+    vessel : str or Path, optional
+        The ship's vessel (default :data:`DEFAULT`).
+    length_m, beam_m : float, optional
+        The ship's own length and beam [m] (> 0); ``None`` for the vessel's.
+    unit : str or Path, optional
+        The own ship's vessel, whose length is the unit (default :data:`DEFAULT`).
+
+    Returns
+    -------
+    tuple of float
+        ``(length, half_beam)`` in L: a KCS gives exactly ``(1.0, 0.07)``.
+
+    Examples
+    --------
+    >>> ship_size()[0], ship_size(length_m=122.0)[0] == 122.0 / 230.0
+    (1.0, True)
+    >>> round(ship_size("kvlcc2")[0], 4)
+    1.3913
+    """
+    unit = load_vessel(unit or DEFAULT).ship.L
+    hull = load_vessel(vessel or DEFAULT).ship
+    length = hull.L if length_m is None else float(length_m)
+    beam = hull.B if beam_m is None else float(beam_m)
+    return length / unit, 0.5 * beam / unit
+
+
+def pair_collision_distance(collision_distance, length_a, length_b):
+    """Centre distance below which two ships of lengths ``length_a`` and ``length_b`` (L) collide.
+
+    ``collision_distance`` (the paper's 2 L) is the distance for two ships of the unit length; it scales with
+    their mean length, ``collision_distance * (length_a + length_b) / 2``, which is exactly
+    ``collision_distance`` for two ships of length 1 (the arithmetic has no rounding there). Works on floats,
+    NumPy arrays and CasADi expressions alike.
+
+    Parameters
+    ----------
+    collision_distance : float or array or SX/MX
+        The collision distance of two ships of the unit length (L).
+    length_a, length_b : float or array or SX/MX
+        The two ships' lengths (L, :func:`ship_size`).
+
+    Returns
+    -------
+    float or array or SX/MX
+        The pair's collision distance (L).
+
+    Examples
+    --------
+    >>> pair_collision_distance(2.0, 1.0, 1.0)
+    2.0
+    >>> round(pair_collision_distance(2.0, 1.0, 122.0 / 230.0), 4)
+    1.5304
+    """
+    return collision_distance * (0.5 * (length_a + length_b))

@@ -124,6 +124,11 @@ def turning_circle(rudder_deg: float = 35.0, *, port: bool = False, speed: float
     ship, steering : ShipParams, SteeringParams, optional
         Ship and steering gear (default: the KCS).
 
+    Returns
+    -------
+    ManeuverResult
+        Time history (t in L/U, states, rudder command) with ``metrics`` from :func:`turning_metrics`.
+
     Examples
     --------
     >>> r = turning_circle(15)
@@ -175,6 +180,13 @@ def turning_metrics(res: ManeuverResult, rudder_deg: float, port: bool, speed: f
         True for a turn to port, False to starboard.
     speed : float
         Approach speed (fraction of the design speed), recorded in the metrics.
+
+    Returns
+    -------
+    dict
+        ``advance``, ``transfer``, ``tactical_diameter``, ``x_min``, ``steady_diameter`` (L), ``time_to_90``,
+        ``time_to_180`` (L/U_des), ``final_speed`` (U/U_des), the inputs ``rudder_deg``, ``direction`` and ``speed``,
+        ``maneuver`` (``'turning'``) and ``units``.
     """
     psi = np.abs(res.state("psi"))
     x, y = res.state("x"), res.state("y")
@@ -220,6 +232,11 @@ def zigzag(angle_deg: float = 10.0, *, speed: float = 1.0, t_end: float = 40.0,
     ship, steering : ShipParams, SteeringParams, optional
         Ship and steering gear (default: the KCS).
 
+    Returns
+    -------
+    ManeuverResult
+        Time history (t in L/U, states, rudder command) with ``metrics`` from :func:`zigzag_metrics`.
+
     Examples
     --------
     >>> r = zigzag(10)
@@ -251,6 +268,12 @@ def zigzag_metrics(res: ManeuverResult, sign: np.ndarray, angle_deg: float) -> d
         Rudder-command sign (±1) at each sample; needs three reversals.
     angle_deg : float
         Zig-zag rudder angle and heading trigger (deg).
+
+    Returns
+    -------
+    dict
+        ``overshoot_1``, ``overshoot_2`` (deg), ``time_first_reversal``, ``time_overshoot_1``,
+        ``time_overshoot_2`` (L/U_des), ``angle_deg``, ``maneuver`` (``'zigzag'``) and ``units``.
     """
     psi = np.degrees(res.state("psi"))
     rev = np.flatnonzero(np.diff(sign) != 0) + 1  # samples after each rudder reversal
@@ -295,6 +318,11 @@ def speed_change(to_speed: float = 0.5, *, speed: float = 1.0, t_end: float = 12
     ship, steering : ShipParams, SteeringParams, optional
         Ship and steering gear (default: the KCS).
 
+    Returns
+    -------
+    ManeuverResult
+        Time history (t in L/U, states, rudder command zero) with ``metrics`` from :func:`speed_metrics`.
+
     Examples
     --------
     >>> r = speed_change(0.5)
@@ -333,6 +361,13 @@ def speed_metrics(res: ManeuverResult, n: np.ndarray, speed: float, to_speed: fl
         Approach and ordered propeller speed (rev/min).
     ship : ShipParams
         The ship (its length and time scale convert to m and s).
+
+    Returns
+    -------
+    dict
+        ``rpm_from``, ``rpm_to`` (rev/min), ``final_speed`` (U/U_des), ``t_engine``, ``t_change`` (L/U_des),
+        ``reach_change`` (L), ``t_engine_s``, ``t_change_s`` (s), ``reach_change_m`` (m), the inputs ``speed`` and
+        ``to_speed``, ``kind`` (``'speed'``) and ``units``.
     """
     u = res.state("u")
     band = SPEED_BAND * abs(speed - to_speed)

@@ -39,6 +39,12 @@ def mass_matrix(ship: ShipParams) -> np.ndarray:
     ----------
     ship : ShipParams
         Ship parameters.
+
+    Returns
+    -------
+    numpy.ndarray (3, 3)
+        Non-dimensional mass matrix of the surge, sway and yaw equations, ``[[m + m_x, 0, 0], [0, m + m_y, m x_G],
+        [0, m x_G, I_zz + J_zz]]`` (prime-II).
     """
     m, xg = ship.m, ship.xG_nd
     return np.array([
@@ -66,6 +72,12 @@ def wake_factor(ship: ShipParams, u, v, r):
         Ship parameters.
     u, v, r : float or casadi.SX or casadi.MX
         Non-dimensional surge, sway velocity and yaw rate (units of U_des, U_des/L).
+
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        ``1 - w_P``, the fraction of the inflow speed that reaches the propeller (dimensionless); a float for the
+        ``'beta'`` hull form.
     """
     if ship.hull_form != "yy2015":
         return 1.0 - ship.wP
@@ -91,6 +103,15 @@ def propeller_terms(ship: ShipParams, u, n_rpm, v=0.0, r=0.0):
         Propeller speed (rev/min).
     v, r : float or casadi.SX or casadi.MX, optional
         Sway velocity and yaw rate (the ``'yy2015'`` wake depends on them; straight running if omitted).
+
+    Returns
+    -------
+    J : float or casadi.SX or casadi.MX
+        Advance ratio (dimensionless).
+    K_T : float or casadi.SX or casadi.MX
+        Thrust coefficient (dimensionless).
+    X_P : float or casadi.SX or casadi.MX
+        Non-dimensional propeller thrust X_P' (prime-II).
     """
     n = n_rpm / 60.0
     J = u * ship.U_design * wake_factor(ship, u, v, r) / (n * ship.DP)
@@ -113,6 +134,15 @@ def hull_forces(ship: ShipParams, u, v, r):
         Non-dimensional sway velocity v' (units of U_des).
     r : float or casadi.SX or casadi.MX
         Non-dimensional yaw rate r' (rad per unit time L/U).
+
+    Returns
+    -------
+    X_H : float or casadi.SX or casadi.MX
+        Non-dimensional hull surge force X_H' (prime-II).
+    Y_H : float or casadi.SX or casadi.MX
+        Non-dimensional hull sway force Y_H' (prime-II).
+    N_H : float or casadi.SX or casadi.MX
+        Non-dimensional hull yaw moment N_H' (prime-II).
     """
     if ship.hull_form == "yy2015":
         return _hull_forces_yy(ship, u, v, r)
@@ -172,6 +202,18 @@ def rudder_forces(ship: ShipParams, u, v, r, delta, n_rpm):
         Rudder angle δ (rad).
     n_rpm : float or casadi.SX or casadi.MX
         Propeller speed (rev/min).
+
+    Returns
+    -------
+    X_R : float or casadi.SX or casadi.MX
+        Non-dimensional rudder surge force X_R' (prime-II).
+    Y_R : float or casadi.SX or casadi.MX
+        Non-dimensional rudder sway force Y_R' (prime-II).
+    N_R : float or casadi.SX or casadi.MX
+        Non-dimensional rudder yaw moment N_R' (prime-II).
+    inflow : dict
+        ``"uR"``, ``"vR"`` (rudder inflow velocities, units of U_des), ``"alphaR"`` (effective rudder angle, rad),
+        ``"J"`` and ``"KT"`` (advance ratio and thrust coefficient of :func:`propeller_terms`).
     """
     J, KT, _ = propeller_terms(ship, u, n_rpm, v, r)
     one_minus_w = wake_factor(ship, u, v, r)
@@ -220,6 +262,12 @@ def mmg_rhs(ship: ShipParams, steering: SteeringParams, x, delta_c, n_rpm, env=N
         Disturbance ``[V_c, beta_c, U_w, psi_w]`` (speeds in U_des, directions rad); ``None`` for calm water.
     windage : Windage, optional
         Wind-load description; the default :class:`~mmg_casadi.vessel.environment.Windage` if ``None``.
+
+    Returns
+    -------
+    casadi.SX or casadi.MX (7, 1)
+        ``ẋ`` in :data:`STATE_NAMES` order: accelerations (U_des per L/U, rad per (L/U)²), velocities over ground
+        (L per L/U) and yaw rate, rudder rate (rad per L/U).
     """
     u, v, r, psi, delta = x[0], x[1], x[2], x[5], x[6]
     XH, YH, NH = hull_forces(ship, u, v, r)
@@ -261,6 +309,12 @@ def build_mmg(ship: ShipParams | None = None, steering: SteeringParams | None = 
     windage : Windage, optional
         Wind-load description used when ``disturbed``.
 
+    Returns
+    -------
+    casadi.Function
+        ``mmg(x, delta_c, n_rpm) -> xdot``, or ``mmg_env(x, delta_c, n_rpm, env) -> xdot`` with ``disturbed``;
+        ``xdot`` is :func:`mmg_rhs` (7x1).
+
     Examples
     --------
     >>> f = build_mmg()
@@ -285,6 +339,66 @@ def build_mmg(ship: ShipParams | None = None, steering: SteeringParams | None = 
                        ["x", "delta_c", "n_rpm", "env"], ["xdot"])
 
 
+def scene_scales(ship: ShipParams, unit: ShipParams) -> tuple[float, float]:
+    """Length and speed ratios ``(λ, μ) = (L/L_unit, U_des/U_des,unit)`` of ``ship`` in a scene whose units are
+    ``unit``'s length and design speed (its time unit is ``unit``'s L/U_des; ``λ/μ`` is the ship's time unit in it).
+
+    Parameters
+    ----------
+    ship, unit : ShipParams
+        The hull sailed and the hull whose L and U_des are the scene's units (a scenario's own ship).
+
+    Returns
+    -------
+    tuple of float
+        ``(λ, μ)``; ``(1.0, 1.0)`` exactly when both hulls have the same L and U_des.
+
+    Examples
+    --------
+    >>> from mmg_casadi.vessel.library import load_vessel
+    >>> lam, mu = scene_scales(load_vessel("kvlcc2").ship, load_vessel("kcs").ship)
+    >>> round(lam, 4), round(mu, 4)
+    (1.3913, 0.6458)
+    """
+    return ship.L / unit.L, ship.U_design / unit.U_design
+
+
+def in_scene_units(f: ca.Function, ship: ShipParams, unit: ShipParams) -> ca.Function:
+    """The model ``f`` (:func:`build_mmg` of ``ship``) with its state and time in the units of another hull.
+
+    With ``(λ, μ) =`` :func:`scene_scales` and ``τ = λ/μ`` (the ship's time unit in scene time units), the scene
+    state is ``S x`` with ``S = diag(μ, μ, 1/τ, λ, λ, 1, 1)`` (velocities in the scene's U, yaw rate per scene time,
+    positions in the scene's L, angles unchanged) and ``ẋ_scene = S f(S⁻¹ x_scene, ...) / τ``. A disturbed
+    model's current and wind speeds (``env[0]``, ``env[2]``, in the scene's U) are divided by μ. The ship sails
+    exactly as in its own units: the same trajectory in metres and seconds (a test checks it).
+
+    Parameters
+    ----------
+    f : casadi.Function
+        ``mmg(x, delta_c, n_rpm)`` or ``mmg_env(x, delta_c, n_rpm, env)`` of ``ship``.
+    ship, unit : ShipParams
+        The hull of ``f`` and the hull whose L and U_des are the scene's units.
+
+    Returns
+    -------
+    casadi.Function
+        ``f`` itself when the two hulls have the same L and U_des, else a Function of the same inputs named
+        ``<f>_scene``.
+    """
+    lam, mu = scene_scales(ship, unit)
+    if lam == 1.0 and mu == 1.0:
+        return f
+    tau = lam / mu
+    scale = ca.DM([mu, mu, 1.0 / tau, lam, lam, 1.0, 1.0])
+    ins = [ca.SX.sym(f.name_in(k), f.size_in(k)) for k in range(f.n_in())]
+    args = [ins[0] / scale, *ins[1:3]]
+    if f.n_in() > 3:  # the disturbance: speeds in the ship's own U_des
+        env = ins[3]
+        args.append(ca.vertcat(env[0] / mu, env[1], env[2] / mu, env[3:]))
+    xdot = scale * f(*args) / tau
+    return ca.Function(f"{f.name()}_scene", ins, [xdot], [f.name_in(k) for k in range(f.n_in())], ["xdot"])
+
+
 def rk4(f, x, args, h):
     """One classical Runge–Kutta step of ``ẋ = f(x, *args)`` with step ``h`` (inputs held over the step).
 
@@ -298,6 +412,11 @@ def rk4(f, x, args, h):
         Further inputs of ``f``, held constant over the step.
     h : float or casadi.SX or casadi.MX
         Step size (L/U).
+
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM
+        State at the end of the step, ``x + h/6 (k1 + 2 k2 + 2 k3 + k4)``.
     """
     k1 = f(x, *args)
     k2 = f(x + 0.5 * h * k1, *args)
@@ -318,6 +437,12 @@ def build_rk4_step(f: ca.Function | None = None, n_sub: int = 1) -> ca.Function:
         Model from :func:`build_mmg` (default: the calm-water KCS model).
     n_sub : int, optional
         Number of RK4 sub-steps per step ``dt``.
+
+    Returns
+    -------
+    casadi.Function
+        ``rk4_step(x, delta_c, n_rpm, dt) -> x_next``, or ``rk4_step_env(x, delta_c, n_rpm, dt, env) -> x_next``
+        for a disturbed model (``dt`` in L/U, ``x_next`` the 7-state after ``dt``).
 
     Examples
     --------
@@ -361,6 +486,12 @@ def build_cvodes(f: ca.Function | None = None, t_grid=None, *, reltol=1e-10, abs
         Relative tolerance of CVODES.
     abstol : float, optional
         Absolute tolerance of CVODES.
+
+    Returns
+    -------
+    casadi.Function
+        CasADi integrator ``cvodes_mmg``: called with ``x0`` (7) and ``p``, its output ``xf`` holds the state at each
+        time of ``t_grid`` (7 x len(t_grid)).
     """
     f = f or build_mmg()
     x = ca.SX.sym("x", NX)
@@ -393,6 +524,11 @@ def propeller_rpm_for_speed(speed: float, ship: ShipParams | None = None) -> flo
         Steady speed as a fraction of the design speed U_des (> 0).
     ship : ShipParams, optional
         Ship parameters (default: the KCS).
+
+    Returns
+    -------
+    float
+        Propeller speed (rev/min).
 
     Examples
     --------
@@ -428,6 +564,13 @@ def linearise(state, inputs, ship: ShipParams | None = None, steering: SteeringP
         Current and wind ``[V_c, beta_c, U_w, psi_w]``; calm water if omitted.
     windage : Windage, optional
         Projected areas for the wind load (default: the KCS estimate).
+
+    Returns
+    -------
+    A : numpy.ndarray (7, 7)
+        ``∂ẋ/∂x`` at the operating point (prime-II, per L/U).
+    B : numpy.ndarray (7, 2)
+        ``∂ẋ/∂[delta_c, n_rpm]`` at the operating point.
 
     Examples
     --------

@@ -278,6 +278,11 @@ class SteeringParams:
         ----------
         ship : ShipParams
             Ship whose L/U_des sets the time scale.
+
+        Returns
+        -------
+        float
+            Largest rudder rate (rad per unit time L/U_des).
         """
         return math.radians(self.rate_max_deg_per_s) * ship.time_scale_s
 
@@ -319,6 +324,11 @@ def required_coefficients(hull_form: str) -> tuple[str, ...]:
     hull_form : str
         One of :data:`HULL_FORMS`.
 
+    Returns
+    -------
+    tuple of str
+        Field names of :class:`ShipParams` (``hull_form`` excluded) that the file must give, in field order.
+
     Examples
     --------
     >>> "R0" in required_coefficients("yy2015"), "R0" in required_coefficients("beta")
@@ -336,6 +346,11 @@ def ship_from_table(raw: dict) -> ShipParams:
     ----------
     raw : dict
         The parsed TOML file.
+
+    Returns
+    -------
+    ShipParams
+        The ship, every coefficient as a float.
     """
     model = raw.get("model", {})
     form = model.get("hull_form", "beta") if isinstance(model, dict) else None
@@ -366,6 +381,11 @@ def load_ship(path: str | Path) -> ShipParams:
     ----------
     path : str or pathlib.Path
         TOML data file in the format of the packaged ``kcs_mmg.toml`` / ``kvlcc2_mmg.toml``.
+
+    Returns
+    -------
+    ShipParams
+        The ship of the file.
     """
     return ship_from_table(_read_toml(path))
 
@@ -377,6 +397,11 @@ def load_kcs(path: str | Path | None = None) -> ShipParams:
     ----------
     path : str or pathlib.Path, optional
         TOML data file to read instead of the packaged one.
+
+    Returns
+    -------
+    ShipParams
+        The KCS (packaged file read once and shared; the object is frozen), or the ship of ``path``.
 
     Examples
     --------
@@ -394,6 +419,11 @@ def load_steering(path: str | Path | None = None) -> SteeringParams:
     ----------
     path : str or pathlib.Path, optional
         TOML data file to read instead of the packaged one.
+
+    Returns
+    -------
+    SteeringParams
+        Rudder limit (deg), steering time constant (L/U) and rate limit (deg/s) of the file.
     """
     return steering_from_table(_read_toml(path))
 
@@ -405,6 +435,11 @@ def steering_from_table(raw: dict) -> SteeringParams:
     ----------
     raw : dict
         The parsed TOML file.
+
+    Returns
+    -------
+    SteeringParams
+        Rudder limit (deg), steering time constant (L/U) and rate limit (deg/s) of the block.
     """
     s = raw["steering"]
     for k in ("delta_max_deg", "T_delta", "rate_max_deg_per_s"):
@@ -422,6 +457,11 @@ def load_reference(name: str = "turning_15deg_starboard", path: str | Path | Non
         Name of the ``[reference.NAME]`` table.
     path : str or pathlib.Path, optional
         TOML data file to read instead of the packaged one.
+
+    Returns
+    -------
+    dict
+        A copy of the ``[reference.NAME]`` table, its keys and units as in the data file.
     """
     return dict(_read_toml(path)["reference"][name])
 
@@ -436,6 +476,12 @@ def derived_masses(ship: ShipParams) -> dict:
     ----------
     ship : ShipParams
         Ship whose particulars are used.
+
+    Returns
+    -------
+    dict
+        ``"m"``, ``"mx"``, ``"my"`` (over ½L²d), ``"Jzz"`` (over ½L⁴d) and ``"Izz"`` (``m'(k_zz² + x_G'²)``),
+        non-dimensional (prime-II).
     """
     q = 0.5 * ship.L**2 * ship.d
     m = ship.displacement / q

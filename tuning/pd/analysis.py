@@ -41,6 +41,11 @@ def closed_loop(model: YawModel, kp: float, kd: float) -> ct.StateSpace:
     kd : float
         Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
 
+    Returns
+    -------
+    control.StateSpace
+        The closed loop, input ``psi_d``, outputs ``psi``, ``r``, ``delta_c`` (design-speed units).
+
     Examples
     --------
     >>> from tuning.linear import yaw_subsystem
@@ -135,6 +140,12 @@ def linear_step(model: YawModel, kp: float, kd: float, step_deg: float = 10.0, t
     t_end : float, optional
         Horizon (L/U_des); by default 12 times the slowest closed-loop time constant, clipped to [30, 400]
         (100 if the loop is unstable).
+
+    Returns
+    -------
+    StepResponse
+        Heading, yaw rate and commanded rudder histories over time (L/U_des) with the step metrics (no actual
+        rudder).
     """
     t_end = t_end or _horizon(model, kp, kd)
     t = np.arange(0.0, t_end + DT / 2, DT)
@@ -231,6 +242,12 @@ def analyse_loop(model: YawModel, kp: float, kd: float, step_deg: float = 10.0) 
         Derivative gain K_d on the measured yaw rate (rad of rudder per U_des/L).
     step_deg : float
         Heading step (degrees) of the linear step response.
+
+    Returns
+    -------
+    LoopAnalysis
+        Poles, natural frequencies (U_des/L), damping ratios, the dominant ones, gain and phase margins (deg),
+        crossover frequencies, stability and the linear step (empty when unstable).
 
     Examples
     --------

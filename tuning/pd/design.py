@@ -29,6 +29,9 @@ K_p ≤ 3.5 design with K_d ≥ 0; the dominance limit is used and :attr:`PdDesi
 The paper's gains K_p = 3.5, K_d = 4 are exactly the ``"nomoto"`` design with ζ ≈ 0.8 and the no-saturation
 ω_n at the design speed; on the full model their dominant pair has ζ ≈ 0.32
 (:func:`~tuning.pd.gain_map.paper_gains_map`).
+
+The numbers above are the KCS's; ``vessel`` designs for another hull of the library (or a vessel .toml file), at
+a fraction of its design speed and in its L/U_des.
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ import numpy as np
 
 from mmg_casadi.errors import ParameterError, check_range
 from mmg_casadi.params import PARAMETERS
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL
 
 from ..linear import YawModel, nomoto_first_order, yaw_subsystem
 from .analysis import LoopAnalysis, analyse_loop
@@ -114,6 +118,11 @@ def second_order_overshoot(zeta: float) -> float:
     zeta : float
         Damping ratio.
 
+    Returns
+    -------
+    float
+        Overshoot (%).
+
     Examples
     --------
     >>> round(second_order_overshoot(0.8), 2), second_order_overshoot(1.0)
@@ -140,6 +149,13 @@ def place_pair(model: YawModel, zeta: float, wn: float) -> tuple[float, float]:
         Damping ratio of the pair.
     wn : float
         Natural frequency of the pair (U_des/L).
+
+    Returns
+    -------
+    kp : float
+        Proportional gain K_p (rad of rudder per rad of heading error).
+    kd : float
+        Derivative gain K_d (rad of rudder per U_des/L of yaw rate).
 
     Examples
     --------
@@ -216,6 +232,12 @@ def wn_limits(model: YawModel, zeta: float, method: str = "placement", step_deg:
         Design method (module docstring); ``"nomoto"`` has only the saturation limit.
     step_deg : float
         Heading step (degrees) that must not saturate the rudder.
+
+    Returns
+    -------
+    dict
+        ``"saturation"``, ``"dominance"`` and ``"both"``: the largest ω_n (U_des/L) meeting that limit, or None
+        (``"dominance"`` is None for ``"nomoto"``).
 
     Examples
     --------
@@ -322,6 +344,11 @@ class PdDesign:
     model: YawModel | None = field(default=None, repr=False)
 
     @property
+    def vessel(self) -> str:
+        """The hull designed for: the model's (:attr:`YawModel.vessel`), the KCS without a model."""
+        return DEFAULT_VESSEL if self.model is None else self.model.vessel
+
+    @property
     def overshoot(self) -> float:
         return self.loop.overshoot
 
@@ -353,23 +380,33 @@ class PdDesign:
         return d
 
 
-def _as_model(model_or_speed, side: str = "port") -> YawModel:
+def _as_model(model_or_speed, side: str = "port", vessel: str = DEFAULT_VESSEL) -> YawModel:
     if isinstance(model_or_speed, YawModel):
         return model_or_speed
-    return yaw_subsystem(model_or_speed, side)
+    return yaw_subsystem(model_or_speed, side, vessel=vessel)
 
 
-def design_pd(model_or_speed=1.0, spec: PdSpec | None = None, *, side: str = "port") -> PdDesign:
+def design_pd(model_or_speed=1.0, spec: PdSpec | None = None, *, side: str = "port",
+              vessel: str = DEFAULT_VESSEL) -> PdDesign:
     """Design the PD heading controller on the linear yaw model (a :class:`YawModel` or a speed).
 
     Parameters
     ----------
     model_or_speed : YawModel or float
-        The linear model, or a speed (fraction of U_des) linearised on ``side``.
+        The linear model, or a speed (fraction of the hull's U_des) linearised on ``side``.
     spec : PdSpec
         Damping, natural frequency / settling time, method; defaults to ``PdSpec()``.
     side : {"port", "starboard", "mean"}
         Side of the linearisation when ``model_or_speed`` is a speed (ignored for a :class:`YawModel`).
+    vessel : str or pathlib.Path
+        Hull linearised when ``model_or_speed`` is a speed: a name of :data:`~mmg_casadi.vessel.library.VESSELS`
+        or a vessel .toml file (default the KCS; ignored for a :class:`YawModel`, which carries its own).
+
+    Returns
+    -------
+    PdDesign
+        Gains, method, ζ, ω_n and its source, the Nomoto model and gains, the linear loop analysis and the ω_n
+        limits.
 
     Examples
     --------
@@ -383,7 +420,7 @@ def design_pd(model_or_speed=1.0, spec: PdSpec | None = None, *, side: str = "po
     (3.5, 3.9, 0.31)
     """
     spec = spec or PdSpec()
-    model = _as_model(model_or_speed, side)
+    model = _as_model(model_or_speed, side, vessel)
     nom = nomoto_first_order(model)
     zeta = spec.effective_zeta
     limits = wn_limits(model, zeta, spec.method, spec.step_deg)
@@ -408,7 +445,7 @@ def design_pd(model_or_speed=1.0, spec: PdSpec | None = None, *, side: str = "po
 
 
 def analyse_gains(kp: float, kd: float, model_or_speed=1.0, *, side: str = "port",
-                  step_deg: float = 10.0) -> PdDesign:
+                  step_deg: float = 10.0, vessel: str = DEFAULT_VESSEL) -> PdDesign:
     """Given gains as a :class:`PdDesign` (``method="given"``) with their Nomoto-equivalent ζ and ω_n.
 
     Parameters
@@ -418,11 +455,19 @@ def analyse_gains(kp: float, kd: float, model_or_speed=1.0, *, side: str = "port
     kd : float
         Derivative gain K_d, ≥ 0, on the measured yaw rate (rad of rudder per U_des/L).
     model_or_speed : YawModel or float
-        The linear model, or a speed (fraction of U_des) linearised on ``side``.
+        The linear model, or a speed (fraction of the hull's U_des) linearised on ``side``.
     side : {"port", "starboard", "mean"}
         Side of the linearisation when ``model_or_speed`` is a speed.
     step_deg : float
         Heading step (degrees) of the linear step response.
+    vessel : str or pathlib.Path
+        Hull linearised when ``model_or_speed`` is a speed (a name of :data:`~mmg_casadi.vessel.library.VESSELS`
+        or a vessel .toml file; default the KCS; ignored for a :class:`YawModel`).
+
+    Returns
+    -------
+    PdDesign
+        The gains with ``method="given"``, their equivalent ζ and ω_n and the linear loop analysis.
 
     Examples
     --------
@@ -432,7 +477,7 @@ def analyse_gains(kp: float, kd: float, model_or_speed=1.0, *, side: str = "port
     """
     check_range("kp", kp, 0.0, None, low_open=True)
     check_range("kd", kd, 0.0, None)
-    model = _as_model(model_or_speed, side)
+    model = _as_model(model_or_speed, side, vessel)
     nom = nomoto_first_order(model)
     wn = math.sqrt(kp * nom.K / nom.T)
     zeta = (1.0 + nom.K * kd) / (2.0 * wn * nom.T)

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL
+
 from ..linear import YawModel, yaw_subsystem
 from .analysis import SETTLING
 from .design import PAPER_GAINS, PdDesign, analyse_gains
@@ -97,6 +99,15 @@ def grid_step_metrics(model: YawModel, kp_grid, kd_grid, t_end: float = 150.0, d
         Horizon of the step (L/U_des).
     dt : float
         Discretisation step (L/U_des).
+
+    Returns
+    -------
+    overshoot : numpy.ndarray (len(kd_grid), len(kp_grid))
+        Overshoot (%), NaN where the loop is unstable or does not settle.
+    settling_time : numpy.ndarray (len(kd_grid), len(kp_grid))
+        2 % settling time (L/U_des), NaN likewise.
+    dominant_zeta : numpy.ndarray (len(kd_grid), len(kp_grid))
+        Damping ratio of the dominant pole(s), at most 1; NaN where unstable.
     """
     KP, KD = np.meshgrid(np.asarray(kp_grid, float), np.asarray(kd_grid, float))
     kp, kd = KP.ravel(), KD.ravel()
@@ -130,19 +141,28 @@ def grid_step_metrics(model: YawModel, kp_grid, kd_grid, t_end: float = 150.0, d
     return os_.reshape(shape), ts.reshape(shape), zeta.reshape(shape)
 
 
-def paper_gains_map(speed: float = 1.0, *, side: str = "port", kp_grid=None, kd_grid=None) -> GainMap:
+def paper_gains_map(speed: float = 1.0, *, side: str = "port", kp_grid=None, kd_grid=None,
+                    vessel: str = DEFAULT_VESSEL) -> GainMap:
     """Where the paper's K_p = 3.5, K_d = 4 sit on the linear model at ``speed``, and a (K_p, K_d) grid map.
 
     Parameters
     ----------
     speed : float
-        Fraction of the design speed, in [0.2, 1.2].
+        Fraction of the hull's design speed, in [0.2, 1.2].
     side : {"port", "starboard", "mean"}
         Side of the linearisation.
     kp_grid : array_like, optional
         K_p values of the map; 40 points over [0.1, 6] by default.
     kd_grid : array_like, optional
         K_d values of the map; 41 points over [0, 8] by default.
+    vessel : str or pathlib.Path
+        The hull: a name of :data:`~mmg_casadi.vessel.library.VESSELS` or a vessel .toml file (default the KCS).
+
+    Returns
+    -------
+    GainMap
+        The paper's gains analysed (:func:`~tuning.pd.design.analyse_gains`), the grids and the step metrics over
+        them.
 
     Examples
     --------
@@ -150,7 +170,7 @@ def paper_gains_map(speed: float = 1.0, *, side: str = "port", kp_grid=None, kd_
     >>> g.paper.loop.stable, round(g.paper.loop.dominant_zeta, 2), round(float(g.overshoot[1, 1]), 1)
     (True, 0.32, 10.9)
     """
-    model = yaw_subsystem(speed, side)
+    model = yaw_subsystem(speed, side, vessel=vessel)
     paper = analyse_gains(*PAPER_GAINS, model)
     kp_grid = np.linspace(0.1, 6.0, 40) if kp_grid is None else np.asarray(kp_grid, float)
     kd_grid = np.linspace(0.0, 8.0, 41) if kd_grid is None else np.asarray(kd_grid, float)

@@ -11,12 +11,18 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mmg_casadi.plotting import FIGURE_DPI
+from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel
 
 from ..linear import yaw_subsystem
 from .analysis import _gain_row
 from .design import PdDesign, _polys
 from .gain_map import GainMap
 from .verification import NonlinearCheck
+
+
+def _hull(design: PdDesign) -> str:
+    """``", <hull>"`` for a title of a design for another hull than the KCS, else nothing."""
+    return "" if design.vessel == DEFAULT_VESSEL else f", {load_vessel(design.vessel).name}"
 
 
 def _save(fig: Figure, path) -> Figure:
@@ -36,8 +42,13 @@ def plot_root_locus(design: PdDesign, path=None, *, paper: PdDesign | None = Non
         Where to save the figure (PNG, 150 dpi); not saved if None.
     paper : PdDesign, optional
         A second gain pair (the paper's) whose locus is drawn as well.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (saved to ``path`` when given).
     """
-    model = design.model or yaw_subsystem(design.speed, design.side)
+    model = design.model or yaw_subsystem(design.speed, design.side, vessel=design.vessel)
     fig = Figure(figsize=(7, 6))
     ax = fig.add_subplot(1, 1, 1)
     for d, color, label in ((design, "tab:blue", f"design K_p={design.kp:.3g}, K_d={design.kd:.3g}"),
@@ -65,7 +76,8 @@ def plot_root_locus(design: PdDesign, path=None, *, paper: PdDesign | None = Non
     ax.axvline(0, color="k", lw=0.5)
     ax.set_xlabel("Re s [U/L]")
     ax.set_ylabel("Im s [U/L]")
-    ax.set_title(f"Root locus (gains scaled by k), speed {design.speed:g}, {design.side} side; ζ = {design.zeta:g}")
+    ax.set_title(f"Root locus (gains scaled by k), speed {design.speed:g}{_hull(design)}, {design.side} side; "
+                 f"ζ = {design.zeta:g}")
     ax.legend(loc="upper left", fontsize=8)
     ax.grid(True, alpha=0.3)
     return _save(fig, path)
@@ -82,6 +94,11 @@ def plot_step(design: PdDesign, nonlinear: NonlinearCheck, path=None) -> Figure:
         Nonlinear check of the design (:func:`~tuning.pd.verification.verify_nonlinear`) with the steps to draw.
     path : str or path-like, optional
         Where to save the figure (PNG, 150 dpi); not saved if None.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (saved to ``path`` when given).
     """
     fig = Figure(figsize=(8, 6))
     ax1, ax2 = fig.add_subplot(2, 1, 1), fig.add_subplot(2, 1, 2)
@@ -94,7 +111,7 @@ def plot_step(design: PdDesign, nonlinear: NonlinearCheck, path=None) -> Figure:
     ax1.axhline(abs(math.degrees(nl.psi_d)), color="gray", lw=0.6)
     ax1.set_ylabel("|ψ| [deg]")
     ax1.set_title(f"Heading step {abs(math.degrees(nl.psi_d)):g}°: K_p = {design.kp:.3g}, K_d = {design.kd:.3g} "
-                  f"(speed {nonlinear.speed:g}, {'port' if s < 0 else 'starboard'} step)")
+                  f"(speed {nonlinear.speed:g}{_hull(design)}, {'port' if s < 0 else 'starboard'} step)")
     ax1.legend(fontsize=8)
     ax2.plot(lin.t, s * np.degrees(lin.delta_c), "k--", label="δ_c linear")
     ax2.plot(nl.t, s * np.degrees(nl.delta_c), "tab:blue", lw=0.8, alpha=0.6, label="δ_c nonlinear")
@@ -120,6 +137,11 @@ def plot_gain_map(gain_map: GainMap, path=None, *, design: PdDesign | None = Non
         Where to save the figure (PNG, 150 dpi); not saved if None.
     design : PdDesign, optional
         A design to mark (with its first-order Nomoto gains for a placement design).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (saved to ``path`` when given).
     """
     fig = Figure(figsize=(8, 6))
     ax = fig.add_subplot(1, 1, 1)
@@ -143,6 +165,6 @@ def plot_gain_map(gain_map: GainMap, path=None, *, design: PdDesign | None = Non
     ax.set_ylabel("K_d [L/U]")
     ax.set_xlim(gain_map.kp_grid[0], gain_map.kp_grid[-1])
     ax.set_ylim(gain_map.kd_grid[0], gain_map.kd_grid[-1])
-    ax.set_title(f"Linear heading step over (K_p, K_d), speed {p.speed:g}, {p.side} side")
+    ax.set_title(f"Linear heading step over (K_p, K_d), speed {p.speed:g}{_hull(p)}, {p.side} side")
     ax.legend(fontsize=8, loc="lower right")
     return _save(fig, path)
