@@ -49,6 +49,37 @@ def test_freed_coefficients_are_recovered_within_their_95_percent_intervals(fit)
     assert np.all(fit.std_error < 0.01 * np.abs(truth))  # these data pin the linear derivatives to 1 %
 
 
+@pytest.fixture(scope="module")
+def twenty_seeds():
+    """Fits of the test's data with noise seeds 1-20: whether every freed coefficient's 95 % interval holds the
+    truth, and the relative error of the identified model's 35° tactical diameter (about 45 s)."""
+    import dataclasses
+    truth = np.array([getattr(KCS.ship, n) for n in FREE])
+    td_true = turning_circle(35.0).metrics["tactical_diameter"]
+    inside, td_err = [], []
+    for seed in range(1, 21):
+        f = identify(_noisy_runs(seed), KCS, FREE, sigma=SIGMA)
+        lo, hi = f.interval().T
+        inside.append(bool(np.all((lo <= truth) & (truth <= hi))))
+        ship = dataclasses.replace(KCS.ship, **dict(zip(FREE, f.estimate)))
+        td_err.append(turning_circle(35.0, ship=ship).metrics["tactical_diameter"] / td_true - 1.0)
+    return np.array(inside), np.array(td_err)
+
+
+@pytest.mark.slow
+def test_identified_model_predicts_the_tactical_diameter_within_3_percent(twenty_seeds):
+    """Measured: within 0.016 % in every one of the 20 seeds."""
+    assert np.max(np.abs(twenty_seeds[1])) < 0.03
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="measured: all four intervals hold the truth in 16 of 20 seeds (10 of seeds "
+                   "1-10, 6 of seeds 11-20); per coefficient 18, 18, 18, 17 of 20. The intervals are optimistic: the "
+                   "fit takes the rudder angle as linear between samples")
+def test_intervals_hold_the_truth_in_nine_of_ten_seeds(twenty_seeds):
+    assert twenty_seeds[0].sum() >= 18
+
+
 def test_residuals_match_the_stated_noise_and_correlations_are_a_correlation_matrix(fit):
     s = KCS.ship
     stated = {"u": SIGMA["u"] / s.U_design, "v": SIGMA["v"] / s.U_design, "r": SIGMA["r"] * s.L / s.U_design,
