@@ -134,3 +134,10 @@ def test_environment_6_runs_in_the_monte_carlo_and_reports_grounding():
     assert not [r for r in rows if r["failure"] == "grounding"]
     grounded = run_scenarios([_into_land()], time_guidance_calls=False)
     assert grounded[0]["failure_mechanism"] == "grounding"
+    # Rule 9 in the study's COLREG summary: one verdict per run that sailed the strait's narrow part
+    from mmg_casadi.montecarlo.encounter_summary import summarize_encounters, to_markdown
+    shares = [r["colregs_rule9"] for r in rows if not math.isnan(r["colregs_rule9"])]
+    rule9 = [s for s in summarize_encounters(rows) if s["group"] == "rule 9"]
+    assert shares and len(rule9) == 1 and rule9[0]["n"] == len(shares)
+    assert rule9[0]["kept"] == sum(x >= 0.9 for x in shares)
+    assert "Rule 9 kept [%] (applied)" in to_markdown(summarize_encounters(rows), [])

@@ -12,6 +12,7 @@ Numeric parameters (gains, field constants, speeds, paths, obstacles, walls) are
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -328,23 +329,11 @@ class Layout:
         if len(set(self.methods)) == 1:
             meth = f"{self.methods[0].replace('-', '')}x{self.n_ships}"
         elif self.n_ships > 16:  # long fleets: runs of one method as name x count
-            runs = [[self.methods[0], 0]]
-            for m in self.methods:
-                if m == runs[-1][0]:
-                    runs[-1][1] += 1
-                else:
-                    runs.append([m, 1])
-            meth = "_".join(f"{m.replace('-', '')}x{n}" for m, n in runs)
+            meth = "_".join(f"{m.replace('-', '')}x{n}" for m, n in _runs(self.methods))
         s = "" if self.smooth is None else f"_s{self.smooth:g}".replace(".", "p")
         s += "_env" if self.disturbed else ""
         if any(v != DEFAULT_VESSEL for v in self.vessels):  # the hulls in ship order, run-length encoded
-            hulls = [[self.vessels[0], 0]]
-            for v in self.vessels:
-                if v == hulls[-1][0]:
-                    hulls[-1][1] += 1
-                else:
-                    hulls.append([v, 1])
-            s += "_" + "_".join(f"{v}{n}" for v, n in hulls)
+            s += "_" + "_".join(f"{v}{n}" for v, n in _runs(self.vessels))
         if self.neighbours:
             s += f"n{self.neighbours}"
         if self.vo_speed_levels != PARAMETERS["vo_speed_levels"].default:
@@ -457,6 +446,11 @@ class Layout:
                 i += 1 + 3 * T
         assert i == self.np
         return out
+
+
+def _runs(items) -> list[tuple[str, int]]:
+    """Runs of equal consecutive items as ``(item, count)`` (the run-length code of a layout's key)."""
+    return [(k, len(list(g))) for k, g in itertools.groupby(items)]
 
 
 def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(), walls=(), env=None) -> np.ndarray:

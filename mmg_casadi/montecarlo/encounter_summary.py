@@ -8,7 +8,10 @@ ship's role at the onset of risk, the graded score and each applicable rule's ve
 :func:`summarize_encounters` reduces the cells to one row per (environment, method, group) where the group is
 ``all``, a role (``head-on``, ``give-way``, ``stand-on``, ``overtaking``, ``overtaken``) or a rule
 (``rule 8`` ... ``rule 17c``): encounters ``n``, kept ``k``, the rate ``k / n`` with a Wilson 95 % interval and
-the mean graded score. For a rule, ``n`` counts the encounters in which the rule applies.
+the mean graded score. For a rule, ``n`` counts the encounters in which the rule applies. Cells whose runs sailed
+a narrow channel also get the group ``rule 9``: per run the own ship's Rule 9(a) share (``colregs_rule9``,
+:mod:`mmg_casadi.colregs.narrow_channel`), ``n`` the runs in a channel, kept those at
+:data:`~mmg_casadi.colregs.narrow_channel.KEPT_SHARE` or more, the score the mean share.
 
 :func:`compare_encounters` pairs two methods' encounters of the same run with the same other ship (the i-th risky
 encounter with ship j in run r of one method with the i-th of the other) and compares their compliance with the
@@ -23,6 +26,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from mmg_casadi.colregs.narrow_channel import KEPT_SHARE
 from mmg_casadi.colregs.roles import ROLES
 from mmg_casadi.colregs.verdict import RULES
 from mmg_casadi.errors import InputError
@@ -167,7 +171,8 @@ def summarize_encounters(rows) -> list[dict]:
     Returns
     -------
     list of dict
-        Keys :data:`ENCOUNTER_COLUMNS`; groups without an encounter have ``n = 0`` and ``nan`` rates.
+        Keys :data:`ENCOUNTER_COLUMNS`; groups without an encounter have ``n = 0`` and ``nan`` rates; ``rule 9``
+        only for cells with a run in a narrow channel.
 
     Examples
     --------
@@ -176,6 +181,9 @@ def summarize_encounters(rows) -> list[dict]:
     >>> s = {r["group"]: (r["n"], r["kept"]) for r in summarize_encounters(rows)}
     >>> s["all"], s["give-way"], s["stand-on"], s["rule 8"], s["rule 16"], s["head-on"]
     ((2, 1), (1, 0), (1, 1), (2, 2), (1, 0), (0, 0))
+    >>> rows[0]["colregs_rule9"], rows[1]["colregs_rule9"] = "0.95", "0.4"   # both runs in a narrow channel
+    >>> [(r["n"], r["kept"]) for r in summarize_encounters(rows) if r["group"] == "rule 9"]
+    [(2, 1)]
     """
     out = []
     for (env, method), group in _cells(rows).items():
@@ -190,7 +198,19 @@ def summarize_encounters(rows) -> list[dict]:
                 k = sum(1 for v in chosen if v.compliant)
             out.append({"environment": env, "method": method, "group": name,
                         **_rate(len(chosen), k, [v.score for v in chosen])})
+        shares = [x for x in (_share(r.get("colregs_rule9")) for r in group) if x is not None]
+        if shares:  # runs in a narrow channel: Rule 9(a), one verdict per run
+            out.append({"environment": env, "method": method, "group": "rule 9",
+                        **_rate(len(shares), sum(x >= KEPT_SHARE for x in shares), shares)})
     return out
+
+
+def _share(value) -> float | None:
+    """A run's ``colregs_rule9`` as a float, None when the own ship was never in a narrow channel."""
+    if value is None or value == "":
+        return None
+    x = float(value)
+    return None if math.isnan(x) else x
 
 
 def _keyed(group) -> dict:
@@ -317,10 +337,12 @@ def to_markdown(summary, comparisons) -> str:
         score = g["all"]["score_mean"]
         lines.append("| " + " | ".join([str(env), method, _pct(g["all"]), "n/a" if math.isnan(score) else
                                         f"{score:.3f}", *(_pct(g[x]) for x in ROLES)]) + " |")
-    rules = ["Env", "Method", *(f"Rule {r} kept [%] (applied)" for r in RULES)]
-    lines += ["", "| " + " | ".join(rules) + " |", "|---:|:---|" + ":---|" * len(RULES)]
+    shown = list(RULES) + (["9"] if any("rule 9" in g for g in by_cell.values()) else [])
+    rules = ["Env", "Method", *(f"Rule {r} kept [%] (applied)" for r in shown)]
+    lines += ["", "| " + " | ".join(rules) + " |", "|---:|:---|" + ":---|" * len(shown)]
     for (env, method), g in by_cell.items():
-        lines.append("| " + " | ".join([str(env), method, *(_pct(g[f"rule {r}"]) for r in RULES)]) + " |")
+        lines.append("| " + " | ".join([str(env), method, *(_pct(g[f"rule {r}"]) if f"rule {r}" in g else
+                                                            "n/a (0)" for r in shown)]) + " |")
     if comparisons:
         head = ["Env", "A", "B", "Paired encounters", "A kept [%]", "B kept [%]", "A only", "B only",
                 "A − B [pp] (95 % CI)", "McNemar p", "Unpaired A / B"]
