@@ -169,3 +169,16 @@ def test_give_way_speed_cut_acts_through_the_engine():
     # measured: down to 60.5 rpm of the 115.5 service (the engine's rate limit and lag), then back to service
     assert n_on.min() < 0.6 * n_off[0] and n_on[-1] == pytest.approx(n_off[0])
     assert not on.metrics["collision"] and on.metrics["ships"][0]["status"] == "reached"
+
+
+def test_in_extremis_test_is_in_the_step_only_with_a_cut():
+    """A zero in-extremis cut weighs nothing, so the step leaves its test out (a smaller step); only a
+    colregs-vortex layout carries it."""
+    from mmg_casadi.closed_loop.problem import build_problem
+    from mmg_casadi.scenarios.scenario import with_method
+    from mmg_casadi.closed_loop.step import build_closed_loop_step
+    sc = crossing("colregs-vortex", [[5.0, -40.0]], start=(5.0, 2.5), heading=270.0)
+    off, on = build_problem(sc), build_problem(sc, {"cv_speed_extremis": 1.0})
+    assert not off.layout.cv_extremis and on.layout.cv_extremis and on.layout.key() == off.layout.key() + "_cx"
+    assert not build_problem(with_method(sc, "modified-vortex"), {"cv_speed_extremis": 1.0}).layout.cv_extremis
+    assert build_closed_loop_step(off.layout).n_instructions() < build_closed_loop_step(on.layout).n_instructions()

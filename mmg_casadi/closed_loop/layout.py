@@ -115,6 +115,10 @@ class Layout:
     max_track : int
         Columns of each replayed ship's padded track (:func:`mmg_casadi.closed_loop.replay.track_columns`); 0
         without replayed ships.
+    cv_extremis : bool
+        colregs-vortex's in-extremis speed test is part of the step (``cv_speed_extremis > 0``); without it the
+        cut it would weigh is zero, so the step leaves the test out (it is the costliest part of the method's
+        guidance).
     """
 
     methods: tuple
@@ -132,6 +136,7 @@ class Layout:
     n_land: int = 0
     replay: tuple = ()
     max_track: int = 0
+    cv_extremis: bool = False
 
     def __post_init__(self):
         if not 0 <= self.n_land <= self.n_walls:
@@ -340,6 +345,8 @@ class Layout:
             s += f"_l{self.vo_speed_levels}"
         if self.replay:
             s += "".join(f"_r{i}" for i in self.replay) + f"t{self.max_track}"
+        if self.cv_extremis:
+            s += "_cx"
         return (f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}"
                 f"{'h' if self.vo_hold else ''}{s}")
 
@@ -484,6 +491,7 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
         The parameter vector (lengths in L, times in L/U, angles in rad, propeller speeds in rev/min).
     """
     vals = [float(globals_[name]) for name in GLOBAL_PARAMS]
+    scene_time_s = load_vessel(layout.unit_vessel()).ship.time_scale_s  # the own ship's L/U_des
     for i, s in enumerate(ships):
         path = np.asarray(validate_waypoints(s["path"], f"ships[{i}].path"))
         k = len(path)
@@ -491,7 +499,6 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
             raise ValueError(f"path of {k} points exceeds layout.max_path={layout.max_path}")
         padded = np.vstack([path, np.repeat(path[-1:], layout.max_path - k, axis=0)])
         hull = load_vessel(layout.vessel(i)).ship
-        scene_time_s = load_vessel(layout.unit_vessel()).ship.time_scale_s  # the own ship's L/U_des
         rate = float(globals_["engine_rate_rpm_s"]) * scene_time_s
         lag = float(globals_["engine_lag_s"]) / scene_time_s
         rpm_range = [float(globals_[k]) * hull.n_design_rpm for k in ("engine_dead_slow", "engine_rpm_max")]

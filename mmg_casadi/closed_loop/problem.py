@@ -246,7 +246,8 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
                     vo_speed_levels=resolved["vo_speed_levels"],
                     vessels=() if set(vessels) == {DEFAULT_VESSEL} else vessels,
                     neighbours=resolved["neighbour_slots"] if len(sc.ships) >= resolved["fleet_from_ships"] else 0,
-                    n_land=len(land), **_replay_layout(sc, replayed, resolved, error or ParameterError))
+                    n_land=len(land), **_replay_layout(sc, replayed, resolved, error or ParameterError),
+                    cv_extremis="colregs-vortex" in methods_ and resolved["cv_speed_extremis"] > 0)
     model = ClosedLoopModel(layout, resolved)
     ships = tuple(_ship_inputs(_engine_speed(s), load_vessel(v).ship, v, unit=vessels[0])
                   for s, v in zip(sc.ships, vessels))

@@ -45,7 +45,7 @@ def initial_state(layout: Layout, ships: list[dict]) -> np.ndarray:
     for i, s in enumerate(ships):
         row = np.zeros(layout.ns)
         _, mu = scene_scales(load_vessel(layout.vessel(i)).ship, unit)
-        row[col("u")] = float(s["speed"]) if mu == 1.0 else float(s["speed"]) * mu  # in the own ship's U_des
+        row[col("u")] = float(s["speed"]) * mu  # in the own ship's U_des (μ = 1.0 exactly for her hull)
         row[col("x")], row[col("y")] = s["start"]
         row[col("psi")] = float(s["heading"])
         row[col("n_prop")] = float(s["n_rpm"]) if "n_rpm" in s else propeller_rpm_for_speed(

@@ -476,15 +476,18 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
     # when her alteration alone still leads into close quarters, and in extremis (17(b)) when no heading the ship
     # turns through next at her present speed is outside the collision cones within r_cq (a course change alone
     # cannot avoid them) but that heading is at the reduced speed (slowing helps: speed ∝ propeller speed)
+    cut = ca.fmax(speed_cut * (ca.sum2(active * t["slow"]) > 0),
+                  speed_giveway * (ca.sum2(active * t["escalate"]) > 0))
+    heading = ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_out), ca.sin(psi_out))
+    if isinstance(speed_extremis, (int, float)) and speed_extremis == 0:  # a zero cut: the test is not built
+        return heading, 1 - cut, t
     psi_vo_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_vo - own_psi), -dpsi_cq), dpsi_cq)
     slow_speed = ca.fmax(speed * (1 - speed_extremis), 1e-3)
     no_turn = (1 - ok) * (1 - heading_feasible(own_pos, speed, psi_vo_next, nb_pos, nb_vel, close,
                                                collision_distance=d_cq)) \
         * heading_feasible(own_pos, slow_speed, psi_vo_next, nb_pos, nb_vel, close, collision_distance=d_cq)
-    cut = ca.fmax(speed_cut * (ca.sum2(active * t["slow"]) > 0),
-                  speed_giveway * (ca.sum2(active * t["escalate"]) > 0))
     factor = 1 - ca.fmax(cut, speed_extremis * no_turn * (ca.sum2(close) > 0))
-    return ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_out), ca.sin(psi_out)), factor, t
+    return heading, factor, t
 
 
 def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink, k_vor0, r_safe, r_tol,

@@ -225,12 +225,20 @@ def _modified_vortex(g: GuidanceInputs):
 _CV_FIELDS = tuple(f.name for f in dataclasses.fields(ColregsVortexParams))
 
 
+def _cv_input(g: GuidanceInputs, name: str):
+    """colregs-vortex's threshold ``name`` from the step inputs; the in-extremis cut is the number 0 in a layout
+    without it (``Layout.cv_extremis``), so its test is not built."""
+    if name == "speed_extremis" and not g.layout.cv_extremis:
+        return 0.0
+    return g.P[f"cv_{name}"]
+
+
 def _colregs_vortex(g: GuidanceInputs):
     P = g.P
     heading, factor, memory = colregs_vortex.colregs_vortex_command(
         g.pos, g.psi, g.vel, g.goal, g.nb_pos, g.nb_vel, g.active, g.memory, lam_sink=P["lam_sink"],
         k_vor0=P["k_vor0"], r_safe=P["r_safe"], r_tol=P["r_tol_vortex"], gamma_max=P["gamma_max"],
-        n_candidates=g.layout.vo_candidates, **{k: P[f"cv_{k}"] for k in _CV_FIELDS}, **land_test(g))
+        n_candidates=g.layout.vo_candidates, **{k: _cv_input(g, k) for k in _CV_FIELDS}, **land_test(g))
     return Command(heading, factor * g.service_rpm, memory)
 
 

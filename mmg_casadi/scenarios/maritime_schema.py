@@ -351,8 +351,8 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
         for k, s in enumerate(ships):
             # a target of known length sails the library's closest hull (lengths in KCS lengths only); its speeds
             # are fractions of that hull's design speed
-            hull, why = closest_vessel(s.length_m, s.metadata.get("shipType")) if k and length_scale == "kcs" \
-                else (DEFAULT_VESSEL, "")
+            hull = closest_vessel(s.length_m, s.metadata.get("shipType"))[0] if k and length_scale == "kcs" \
+                else DEFAULT_VESSEL
             u_ship = u_des if hull == DEFAULT_VESSEL else load_vessel(hull).ship.U_design
             speed = s.sog_kn * KNOT / u_ship
             if not lo <= speed <= hi:
@@ -379,7 +379,7 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
                 metadata["name"] = s.raw_name  # the name as read, when the scenario's differs
             rows.append({"name": name, "start": start, "heading": heading, "course": course, "speed": speed,
                          "path": path, "legs": legs, "metadata": metadata, "length_m": s.length_m,
-                         "beam_m": s.beam_m, "vessel": hull, "why": why, "scene_speed": speed * u_ship / u_des})
+                         "beam_m": s.beam_m, "vessel": hull, "scene_speed": speed * u_ship / u_des})
         starts = [np.asarray(r["start"]) for r in rows]
         vel = [r["scene_speed"] * np.array([math.cos(math.radians(r["course"])),
                                             math.sin(math.radians(r["course"]))]) for r in rows]
