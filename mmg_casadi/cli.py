@@ -41,7 +41,8 @@ from mmg_casadi.vessel.maneuvers import speed_change, turning_circle, validate_m
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
 STUDIES = QUICK_STUDIES + ("land", "imazu", "encounters", "disturbance", "statistics", "sweep", "paper", "all")
-_FLAGS = {"base_seed": "--seed", "out_dir": "--out"}
+_FLAGS = {"base_seed": "--seed", "out_dir": "--out", "n_candidates": "--candidates", "search_seed": "--search-seed",
+          "failure_weight": "--failure-weight"}
 """Library argument names whose flag is not ``--`` + the name with dashes."""
 
 
@@ -132,7 +133,8 @@ def build_parser() -> argparse.ArgumentParser:
     m = sub.add_parser("maneuver", help="standard manoeuvres: turning circle, zig-zag, speed change")
     m.add_argument("kind", help="turning | zigzag | speed")
     m.add_argument("--rudder", type=_float, default=35.0, help="turning rudder angle [deg], (0, 35]")
-    m.add_argument("--port", action="store_true", help="turn to port (default starboard)")
+    m.add_argument("--port", action="store_true", help="turning: turn to port; zigzag: first rudder to port "
+                   "(default starboard)")
     m.add_argument("--angle", type=_float, default=10.0, help="zig-zag angle [deg], (0, 35]")
     m.add_argument("--speed", type=_float, default=1.0, help="approach speed / design speed, [0.2, 1.2]")
     m.add_argument("--to-speed", type=_float, default=None,
@@ -220,7 +222,7 @@ def build_parser() -> argparse.ArgumentParser:
             sp.add_argument("--workers", type=_int, default=None, help="local worker processes")
 
     t = sub.add_parser("tune", help="controller and field tuning")
-    tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf}")
+    tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf,colregs}")
     tunes.required = True
     tp = tunes.add_parser("pd", help="PD heading-gain design (pole placement on the linearised model)")
     tp.add_argument("--speed", type=_float, default=1.0, help="speed / design speed, [0.2, 1.2]")
@@ -243,6 +245,23 @@ def build_parser() -> argparse.ArgumentParser:
     ta.add_argument("--workers", type=_int, default=None, help="worker processes of the held-out study")
     _add_params(ta)
     ta.add_argument("--out", type=_path, required=True, help="output directory")
+
+    tc = tunes.add_parser("colregs", help="search colregs-vortex's thresholds for safety plus COLREG compliance, "
+                          "judged on paired held-out runs")
+    tc.add_argument("--design", type=_int, default=1000, help="design runs per environment (run ids 0..N-1)")
+    tc.add_argument("--holdout", type=_int, default=4000, help="held-out runs per environment (the run ids after "
+                    "the design runs)")
+    tc.add_argument("--candidates", type=_int, default=16, help="Latin-hypercube candidates besides the defaults")
+    tc.add_argument("--envs", default="5", help="environments of the design and held-out runs, e.g. 5 or 1-5")
+    tc.add_argument("--failure-weight", dest="failure_weight", type=_float, default=10.0,
+                    help="objective = compliance - W x failure rate (default 10)")
+    tc.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
+    tc.add_argument("--search-seed", dest="search_seed", type=_int, default=0, help="seed of the Latin hypercube")
+    tc.add_argument("--refine", type=_int, default=1, help="coordinate sweeps around the best point after the "
+                    "hypercube (each threshold moved by 1/4, then 1/8, ... of its box width; 0: none)")
+    tc.add_argument("--workers", type=_int, default=None, help="local worker processes")
+    _add_params(tc)
+    tc.add_argument("--out", type=_path, required=True, help="output directory (rerun it to resume)")
 
     c = sub.add_parser("convert", help="maritime-schema traffic situation (.json) <-> scenario file (.toml)")
     c.add_argument("file", type=_path, help="input .json (maritime-schema) or .toml (scenario)")
@@ -313,6 +332,8 @@ def _maneuver(a) -> dict:
     validate_maneuver_args(a.kind)
     if a.to_speed is not None and a.kind != "speed":
         raise InputError("--to-speed", "only with the 'speed' manoeuvre", a.to_speed)
+    if a.port and a.kind == "speed":
+        raise InputError("--port", "only with the 'turning' and 'zigzag' manoeuvres", a.kind)
     v = load_vessel(a.vessel)
     hull = {"ship": v.ship, "steering": v.steering}
     if a.kind == "speed":
@@ -323,8 +344,8 @@ def _maneuver(a) -> dict:
         r = turning_circle(a.rudder, port=a.port, speed=a.speed, **hull)
         name = f"turning_{a.rudder:g}_{'port' if a.port else 'starboard'}"
     else:
-        r = zigzag(a.angle, speed=a.speed, **hull)
-        name = f"zigzag_{a.angle:g}"
+        r = zigzag(a.angle, port=a.port, speed=a.speed, **hull)
+        name = f"zigzag_{a.angle:g}" + ("_port" if a.port else "")
     if a.vessel != "kcs":
         r.metrics["vessel"] = v.name
     a.out.mkdir(parents=True, exist_ok=True)
@@ -390,6 +411,11 @@ def _tune(a) -> dict:
         from tuning import cli_pd  # python-control and the tuning stack: only for 'tune'
         return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn, tracking_tolerance=a.tracking_tolerance,
                           vessel=a.vessel)
+    if a.what == "colregs":
+        from tuning import colregs  # the tuning stack: only for 'tune'
+        return colregs.run(a.out, design=a.design, holdout=a.holdout, n_candidates=a.candidates, envs=a.envs,
+                           params=_params_of(a), failure_weight=a.failure_weight, seed=a.seed,
+                           search_seed=a.search_seed, refine=a.refine, workers=a.workers)
     from tuning import cli_apf  # the tuning stack: only for 'tune'
     try:
         envs = tuple(parse_envs(a.holdout_envs))
@@ -514,7 +540,8 @@ def _check_out(a) -> None:
 def _resumable(a) -> bool:
     """Whether the parsed command resumes from the files it has written when it is run again."""
     return (a is not None and (a.command, getattr(a, "study", None) or getattr(a, "what", None)) in
-            {("study", "statistics"), ("study", "sweep"), ("study", "paper"), ("tune", "apf")})
+            {("study", "statistics"), ("study", "sweep"), ("study", "paper"), ("tune", "apf"),
+             ("tune", "colregs")})
 
 
 def _flag(field: str, a) -> str:

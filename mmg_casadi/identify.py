@@ -3,8 +3,11 @@
 Some coefficients of a base vessel (``free``) are fitted to one or more measured time series of ``t, u, v, r,
 psi, delta, rpm`` (SI units: s, m/s, rad/s, rad, rad, rev/min); everything else stays at the base vessel's value.
 The model is the library's MMG model (:func:`mmg_casadi.vessel.mmg.mmg_rhs`) with the coefficients as CasADi
-symbols, so every derivative is exact; the measured rudder angle and propeller speed are the inputs (linear
-between samples) and the steering gear is not part of the fit.
+symbols, so every derivative is exact; the measured rudder angle and propeller speed are the inputs and the
+steering gear is not part of the fit. Between samples the rudder angle is the shape-preserving cubic (PCHIP)
+through its samples: flat where the rudder holds, the rate where it moves, no overshoot at the corners of a
+rate-limited movement (linear interpolation cuts those corners and biased Y_β and Y_r − m_x by about one standard
+error in the recovery test); the propeller speed is linear between samples.
 
 Problem, in the design-speed prime units of the base vessel (states ``s = [u', v', r', ψ]``)::
 
@@ -15,7 +18,10 @@ Problem, in the design-speed prime units of the base vessel (states ``s = [u', v
 ``σ_c`` is the noise standard deviation of channel ``c`` (given, or estimated from the second differences of the
 measurement). The covariance of the estimate is the Gauss-Newton one of the equivalent single-shooting problem
 in (initial states, θ), ``cov = s² (JᵀJ)⁻¹`` with ``s² = SSR/(N_obs - N_par)``; the report gives standard
-errors, 95 % intervals (± 1.96 standard errors), the correlation matrix and the residuals per channel.
+errors, 95 % intervals (± 1.96 standard errors, and simultaneous ones for all free coefficients at once, see
+:meth:`Identification.interval`), the correlation matrix and the residuals per channel. If IPOPT stops short of
+its tolerance (it can cycle within 1e-6 of the optimum of these least-squares problems), Gauss-Newton steps on the
+single-shooting problem finish the fit (status :data:`POLISHED`).
 
 Examples
 --------
@@ -36,6 +42,8 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
+from scipy.interpolate import PchipInterpolator
+from scipy.stats import norm
 
 from mmg_casadi.errors import InputError
 from mmg_casadi.vessel.library import Vessel, data_path, load_vessel
@@ -54,6 +62,10 @@ FREEABLE = {form: tuple(n for n in required_coefficients(form) if n not in _NOT_
             for form in ("beta", "yy2015")}
 """Coefficients that may be fitted, per hull form: the hull, propeller and rudder coefficients (not particulars,
 masses or added masses, which the mass matrix needs as numbers)."""
+
+POLISHED = "Solved_By_Gauss_Newton"
+"""Status of a fit whose IPOPT run stopped short of its tolerance (typically cycling within 1e-6 of the optimum)
+and whose Gauss-Newton polish converged (:func:`identify`)."""
 
 BOUND_FACTORS = (0.2, 5.0)
 """A fitted coefficient stays between these multiples of its base value (so it keeps its sign)."""
@@ -162,7 +174,7 @@ class Identification:
     sigma : dict
         Noise standard deviation used as weight per channel (prime-II units).
     status : str
-        IPOPT return status.
+        IPOPT return status, or :data:`POLISHED` when IPOPT stopped short and Gauss-Newton steps converged.
     ship : ShipParams
         Base ship with the estimates in place.
     fits : list of numpy.ndarray
@@ -180,20 +192,37 @@ class Identification:
     ship: ShipParams
     fits: list = field(default_factory=list)
 
-    def interval(self, level_z: float = 1.96) -> np.ndarray:
+    def interval(self, level_z: float = 1.96, *, simultaneous: bool = False) -> np.ndarray:
         """``(p, 2)`` confidence intervals, estimate ± ``level_z`` standard errors (95 % by default).
+
+        Each interval holds its own coefficient with the stated confidence; all ``p`` of them hold at once less
+        often (for four weakly correlated estimates about 0.95⁴ ≈ 81 % of the time). With ``simultaneous=True``
+        the intervals are widened by Bonferroni's rule so that they hold **all at once** with at least that
+        confidence: ``z = Φ⁻¹(1 − (1 − c)/(2p))`` with ``c = 2Φ(level_z) − 1`` (2.50 for four coefficients at 95 %).
 
         Parameters
         ----------
         level_z : float, default 1.96
-            Number of standard errors.
+            Number of standard errors of a single interval (1.96: 95 %).
+        simultaneous : bool, default False
+            Intervals for a statement about every free coefficient at once.
 
         Returns
         -------
         numpy.ndarray (p, 2)
             Lower and upper ends for each free coefficient (prime-II, like :attr:`estimate`).
+
+        Examples
+        --------
+        >>> fit = Identification(("a", "b", "c", "d"), np.ones(4), np.ones(4), np.full(4, 0.1), np.eye(4), {}, {},
+        ...                      "Solve_Succeeded", None)
+        >>> np.round(fit.interval()[0], 3), np.round(fit.interval(simultaneous=True)[0], 3)
+        (array([0.804, 1.196]), array([0.75, 1.25]))
         """
-        return np.column_stack([self.estimate - level_z * self.std_error, self.estimate + level_z * self.std_error])
+        z = level_z
+        if simultaneous:
+            z = float(norm.ppf(1.0 - (1.0 - (2.0 * norm.cdf(level_z) - 1.0)) / (2.0 * len(self.free))))
+        return np.column_stack([self.estimate - z * self.std_error, self.estimate + z * self.std_error])
 
     def report(self) -> dict:
         """JSON-ready summary: estimates, standard errors, 95 % intervals, correlation, residuals.
@@ -201,16 +230,17 @@ class Identification:
         Returns
         -------
         dict
-            ``status``, ``coefficients`` (per name ``base``, ``estimate``, ``std_error``, ``ci95``), ``correlation``
+            ``status``, ``coefficients`` (per name ``base``, ``estimate``, ``std_error``, ``ci95`` and
+            ``ci95_simultaneous``, see :meth:`interval`), ``correlation``
             (``names`` and ``matrix``), ``residual_rms`` and ``sigma`` per channel, and ``units``.
         """
-        ci = self.interval()
+        ci, cis = self.interval(), self.interval(simultaneous=True)
         return {
             "status": self.status,
             "coefficients": {n: {"base": float(b), "estimate": float(e), "std_error": float(s),
-                                 "ci95": [float(lo), float(hi)]}
-                             for n, b, e, s, (lo, hi) in zip(self.free, self.base, self.estimate, self.std_error,
-                                                            ci)},
+                                 "ci95": [float(lo), float(hi)], "ci95_simultaneous": [float(a), float(b2)]}
+                             for n, b, e, s, (lo, hi), (a, b2) in zip(self.free, self.base, self.estimate,
+                                                                      self.std_error, ci, cis)},
             "correlation": {"names": list(self.free), "matrix": np.round(self.correlation, 6).tolist()},
             "residual_rms": self.residual_rms,
             "sigma": self.sigma,
@@ -240,7 +270,9 @@ def _prime(run: dict, ship: ShipParams) -> dict:
 
 
 def _step_function(ship: ShipParams, vessel: Vessel, free: tuple[str, ...], n_sub: int) -> ca.Function:
-    """RK4 over one sample interval with inputs linear in time: ``step(s, δa, δb, na, nb, h, θ) -> s_next``."""
+    """RK4 over one sample interval: ``step(s, δa, δb, ma, mb, na, nb, h, θ) -> s_next``, the rudder angle a cubic
+    Hermite between its samples ``δa``, ``δb`` with slopes ``ma``, ``mb`` (per unit time), the propeller speed
+    linear."""
     theta = ca.SX.sym("theta", len(free))
     sym_ship = dataclasses.replace(ship, **{n: theta[i] for i, n in enumerate(free)})
     s = ca.SX.sym("s", 4)
@@ -248,11 +280,16 @@ def _step_function(ship: ShipParams, vessel: Vessel, free: tuple[str, ...], n_su
     full = ca.vertcat(s[0], s[1], s[2], 0, 0, s[3], dl)
     rhs = mmg_rhs(sym_ship, vessel.steering, full, dl, nn)
     f = ca.Function("f_id", [s, dl, nn, theta], [ca.vertcat(rhs[0], rhs[1], rhs[2], rhs[5])])
-    da, db, na, nb, h = (ca.SX.sym(k) for k in ("da", "db", "na", "nb", "h"))
+    da, db, ma, mb, na, nb, h = (ca.SX.sym(k) for k in ("da", "db", "ma", "mb", "na", "nb", "h"))
+
+    def rudder(a):  # cubic Hermite on [0, 1]
+        return ((2 * a ** 3 - 3 * a ** 2 + 1) * da + (a ** 3 - 2 * a ** 2 + a) * h * ma
+                + (-2 * a ** 3 + 3 * a ** 2) * db + (a ** 3 - a ** 2) * h * mb)
+
     x = s
     for j in range(n_sub):
         a0, a1 = j / n_sub, (j + 1) / n_sub
-        d0, dm, d1 = (da + (db - da) * a for a in (a0, 0.5 * (a0 + a1), a1))
+        d0, dm, d1 = (rudder(a) for a in (a0, 0.5 * (a0 + a1), a1))
         n0, nm, n1 = (na + (nb - na) * a for a in (a0, 0.5 * (a0 + a1), a1))
         hh = h / n_sub
         k1 = f(x, d0, n0, theta)
@@ -260,11 +297,20 @@ def _step_function(ship: ShipParams, vessel: Vessel, free: tuple[str, ...], n_su
         k3 = f(x + 0.5 * hh * k2, dm, nm, theta)
         k4 = f(x + hh * k3, d1, n1, theta)
         x = x + hh / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return ca.Function("step_id", [s, da, db, na, nb, h, theta], [x])
+    return ca.Function("step_id", [s, da, db, ma, mb, na, nb, h, theta], [x])
+
+
+def _interval_inputs(d: dict) -> tuple:
+    """The step's inputs over every sample interval of one run, as rows: ``δa, δb, ma, mb, na, nb, h``, the slopes
+    ``m`` those of the shape-preserving (PCHIP) interpolant of the rudder samples (flat where the rudder holds, the
+    rate where it moves, no overshoot at the corners of a rate-limited movement)."""
+    t, dl, n = d["t"], d["delta"][None, :], d["rpm"][None, :]
+    m = PchipInterpolator(t, d["delta"]).derivative()(t)[None, :]
+    return dl[:, :-1], dl[:, 1:], m[:, :-1], m[:, 1:], n[:, :-1], n[:, 1:], np.diff(t)[None, :]
 
 
 def identify(runs: list[dict], vessel: str | Path | Vessel, free, *, sigma: dict | None = None, n_sub: int = 2,
-             max_iter: int = 200) -> Identification:
+             max_iter: int = 100) -> Identification:
     """Fit the coefficients ``free`` of ``vessel`` to the measured ``runs`` (see the module docstring).
 
     Parameters
@@ -279,8 +325,9 @@ def identify(runs: list[dict], vessel: str | Path | Vessel, free, *, sigma: dict
         Noise standard deviation per channel of :data:`CHANNELS` in SI units; estimated from the data if omitted.
     n_sub : int, default 2
         RK4 steps per sample interval.
-    max_iter : int, default 200
-        IPOPT iteration limit.
+    max_iter : int, default 100
+        IPOPT iteration limit (a fit that reaches it is finished by Gauss-Newton steps, status
+        :data:`POLISHED`).
 
     Returns
     -------
@@ -312,15 +359,13 @@ def identify(runs: list[dict], vessel: str | Path | Vessel, free, *, sigma: dict
         w0.append(d["y"].T.ravel(order="F"))
         lbw.append(np.full(4 * N, -np.inf))
         ubw.append(np.full(4 * N, np.inf))
-        F = step.map(N - 1)
-        h = np.diff(d["t"])[None, :]
-        Xn = F(X[:, :-1], d["delta"][None, :-1], d["delta"][None, 1:], d["rpm"][None, :-1], d["rpm"][None, 1:], h,
-               ca.repmat(theta, 1, N - 1))
+        Xn = step.map(N - 1)(X[:, :-1], *_interval_inputs(d), ca.repmat(theta, 1, N - 1))
         g.append(ca.vec(Xn - X[:, 1:]))
         J += ca.sumsqr((X - ca.DM(d["y"].T)) / ca.repmat(ca.DM(sig), 1, N))
     nlp = {"x": ca.vertcat(*w), "f": J, "g": ca.vertcat(*g)}
     solver = ca.nlpsol("identify", "ipopt", nlp, {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False,
-                                                  "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10})
+                                                  "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10,
+                                                  "ipopt.acceptable_tol": 1e-8, "ipopt.acceptable_iter": 10})
     sol = solver(x0=np.concatenate(w0), lbx=np.concatenate(lbw), ubx=np.concatenate(ubw), lbg=0, ubg=0)
     status = solver.stats()["return_status"]
     wopt = np.array(sol["x"]).ravel()
@@ -330,7 +375,10 @@ def identify(runs: list[dict], vessel: str | Path | Vessel, free, *, sigma: dict
         N = len(d["t"])
         fits.append(wopt[off:off + 4 * N].reshape(N, 4))
         off += 4 * N
-    cov, resid = _gauss_newton(step, data, fits, est, sig)
+    est, fits, cov, resid, polished = _gauss_newton(step, data, fits, est, sig, lo, hi,
+                                                    polish=status != "Solve_Succeeded")
+    if polished:
+        status = POLISHED
     se = np.sqrt(np.diag(cov))
     corr = cov / np.outer(se, se)
     return Identification(free, theta0, est, se, corr,
@@ -339,32 +387,52 @@ def identify(runs: list[dict], vessel: str | Path | Vessel, free, *, sigma: dict
                           dataclasses.replace(ship, **dict(zip(free, map(float, est)))), fits)
 
 
-def _gauss_newton(step: ca.Function, data, fits, est, sig):
-    """Covariance of θ from the single-shooting residuals in (initial states of every run, θ), and residuals."""
+def _gauss_newton(step: ca.Function, data, fits, est, sig, lo, hi, *, polish: bool):
+    """Covariance of θ from the single-shooting residuals in (initial states of every run, θ), the fitted states
+    and their residuals; with ``polish``, first Gauss-Newton steps (halved until the sum of squares falls) from
+    IPOPT's point while θ stays inside its bounds. Returns ``(θ, fits, cov, residuals, polished)``, ``polished``
+    when those steps converged (the last one below 1e-9 of each |θ_i| and 1e-9 in the node states)."""
     p = len(est)
     theta = ca.MX.sym("theta", p)
-    x0s, res = [], []
+    x0s, res, preds = [], [], []
     for d in data:
         N = len(d["t"])
         x0 = ca.MX.sym("x0", 4)
         x0s.append(x0)
-        F = step.mapaccum(N - 1)
-        h = np.diff(d["t"])[None, :]
-        X = F(x0, d["delta"][None, :-1], d["delta"][None, 1:], d["rpm"][None, :-1], d["rpm"][None, 1:], h,
-              ca.repmat(theta, 1, N - 1))
+        X = step.mapaccum(N - 1)(x0, *_interval_inputs(d), ca.repmat(theta, 1, N - 1))
         pred = ca.horzcat(x0, X)
+        preds.append(pred)
         res.append(ca.vec((ca.DM(d["y"].T) - pred) / ca.repmat(ca.DM(sig), 1, N)))
     z = ca.vertcat(*x0s, theta)
     r = ca.vertcat(*res)
     fn = ca.Function("gn", [z], [r, ca.jacobian(r, z)])
     z0 = np.concatenate([f[0] for f in fits] + [est])
-    rv, Jm = fn(z0)
-    rv, Jm = np.array(rv).ravel(), np.array(Jm)
+    rv, Jm = (np.array(a) for a in fn(z0))
+    rv = rv.ravel()
+    polished = False
+    for _ in range(20 if polish else 0):
+        dz = -np.linalg.lstsq(Jm, rv, rcond=None)[0]
+        for _ in range(30):
+            z1 = z0 + dz
+            r1 = np.array(fn(z1)[0]).ravel()
+            if np.all((lo <= z1[-p:]) & (z1[-p:] <= hi)) and r1 @ r1 <= rv @ rv:
+                break
+            dz = 0.5 * dz
+        else:
+            break
+        z0 = z1
+        rv, Jm = (np.array(a) for a in fn(z0))
+        rv = rv.ravel()
+        if np.all(np.abs(dz[-p:]) <= 1e-9 * np.abs(z0[-p:])) and np.all(np.abs(dz[:-p]) <= 1e-9):
+            polished = True
+            break
+    if polished:
+        fits = [np.array(f).T for f in ca.Function("pred", [z], preds).call([z0])]
     dof = max(len(rv) - len(z0), 1)
     s2 = float(rv @ rv) / dof
     cov_all = s2 * np.linalg.pinv(Jm.T @ Jm)
     resid = np.vstack([(d["y"] - f) for d, f in zip(data, fits)])
-    return cov_all[-p:, -p:], resid
+    return z0[-p:], fits, cov_all[-p:, -p:], resid, polished
 
 
 def vessel_toml(base: str | Path, result: Identification, source: str) -> str:

@@ -27,6 +27,18 @@ def test_zigzag_writes_overshoots(tmp_path, angle):
     assert m["overshoot_1"] > 0 and m["overshoot_2"] > 0
 
 
+def test_port_first_zigzag_of_the_kvlcc2_and_port_refused_for_a_speed_change(tmp_path, capsys):
+    """The KVLCC2's -10/-10 zig-zag (docs/howto/vessels.md: 8.3 / 10.0 deg, unlike +10/+10's 5.6 / 15.3)."""
+    assert main(["maneuver", "zigzag", "--port", "--vessel", "kvlcc2", "--out", str(tmp_path)]) == 0
+    m = json.loads((tmp_path / "metrics.json").read_text())
+    assert (round(m["overshoot_1"], 1), round(m["overshoot_2"], 1)) == (8.3, 10.0)
+    assert (tmp_path / "zigzag_10_port.png").exists()
+    capsys.readouterr()
+    assert main(["maneuver", "speed", "--port", "--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--port" in err[0] and not (tmp_path / "s").exists()
+
+
 @pytest.mark.parametrize("argv,field", [
     (["maneuver", "spin"], "maneuver"),
     (["maneuver", "turning", "--rudder", "40"], "rudder"),

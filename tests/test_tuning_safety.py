@@ -82,13 +82,13 @@ def test_search_finds_the_minimum_and_resumes_without_recomputing(tmp_path):
 def test_resume_refuses_other_objective_settings(tmp_path):
     from mmg_casadi.errors import InputError
     from mmg_casadi.io import write_json
-    from tuning.cli_apf import _check_settings
+    from tuning.cli_apf import check_settings
     f = tmp_path / "tuning.json"
     a = {"config": {**safety.SafetyConfig().__dict__}, "train": 10}
-    _check_settings(f, a)                      # nothing recorded yet: allowed, and nothing is written
+    check_settings(f, a)                      # nothing recorded yet: allowed, and nothing is written
     assert not f.exists()
     write_json(f, a)                           # what `tune apf` records once every argument is checked
-    _check_settings(f, a)                      # same settings: resume allowed
+    check_settings(f, a)                      # same settings: resume allowed
     b = {"config": {**safety.SafetyConfig(w_mcte=0.1).__dict__}, "train": 10}
     with pytest.raises(InputError, match="config"):
-        _check_settings(f, b)
+        check_settings(f, b)

@@ -133,9 +133,17 @@ def heldout(out, sets: dict, *, runs: int, envs, base_seed: int, workers=None) -
     return res
 
 
-def _check_settings(path: Path, settings: dict) -> None:
-    """Refuse to resume a directory whose stored evaluations were made with other settings of the training
-    objective (the evaluation log is keyed by θ only); writes nothing."""
+def check_settings(path: Path, settings: dict) -> None:
+    """Refuse to resume a directory whose stored results were made with other settings (the evaluation log and
+    the candidate studies are keyed by their parameters only); writes nothing.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The settings file (``tuning.json``) in the output directory.
+    settings : dict
+        The settings of this call (JSON-ready).
+    """
     if path.exists():
         try:
             stored = json.loads(path.read_text(encoding="utf-8"))
@@ -235,7 +243,7 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
     config = config or safety.SafetyConfig()
     settings = {"config": {**config.__dict__}, "train": train, "train_envs": list(TRAIN_ENVS),
                 "train_seed": apf.TRAIN_SEED, "params": extra}
-    _check_settings(out / "tuning.json", settings)
+    check_settings(out / "tuning.json", settings)
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "tuning.json", settings)
     timings = {}

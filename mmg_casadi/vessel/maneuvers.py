@@ -214,9 +214,9 @@ def turning_metrics(res: ManeuverResult, rudder_deg: float, port: bool, speed: f
     }
 
 
-def zigzag(angle_deg: float = 10.0, *, speed: float = 1.0, t_end: float = 40.0,
+def zigzag(angle_deg: float = 10.0, *, port: bool = False, speed: float = 1.0, t_end: float = 40.0,
            ship: ShipParams | None = None, steering: SteeringParams | None = None) -> ManeuverResult:
-    """Zig-zag ``angle_deg``/``angle_deg``, first to starboard.
+    """Zig-zag ``angle_deg``/``angle_deg``, first to starboard, or first to port with ``port=True``.
 
     Metrics (degrees): ``overshoot_1`` and ``overshoot_2`` — how far the heading goes beyond ±angle after the
     first and second rudder reversals; times non-dimensional.
@@ -225,6 +225,8 @@ def zigzag(angle_deg: float = 10.0, *, speed: float = 1.0, t_end: float = 40.0,
     ----------
     angle_deg : float
         Rudder angle and heading-change trigger (degrees, (0, 35]).
+    port : bool, default False
+        First rudder to port (the −angle/−angle zig-zag); the overshoots are then measured to port first.
     speed : float
         Approach speed (fraction of the design speed, [0.2, 1.2]).
     t_end : float
@@ -250,7 +252,8 @@ def zigzag(angle_deg: float = 10.0, *, speed: float = 1.0, t_end: float = 40.0,
     n = propeller_rpm_for_speed(speed, ship)
     a = math.radians(angle_deg)
     steps = int(round(t_end / speed / DT))
-    X, U = _roll(_zigzag_step(ship, steering), [speed, 0, 0, 0, 0, 0, 0, 1.0], [a, n, DT, 0.0], steps)
+    X, U = _roll(_zigzag_step(ship, steering), [speed, 0, 0, 0, 0, 0, 0, -1.0 if port else 1.0], [a, n, DT, 0.0],
+                 steps)
     t = np.arange(X.shape[1]) * DT
     res = ManeuverResult("zigzag", t, X[:NX].T, np.append(U, U[-1]))
     res.metrics = zigzag_metrics(res, X[NX], angle_deg)
@@ -265,7 +268,8 @@ def zigzag_metrics(res: ManeuverResult, sign: np.ndarray, angle_deg: float) -> d
     res : ManeuverResult
         Zig-zag history.
     sign : numpy.ndarray
-        Rudder-command sign (±1) at each sample; needs three reversals.
+        Rudder-command sign (±1) at each sample; needs three reversals. A history that starts with −1 (first to
+        port) is measured mirrored, so its overshoots are positive like a starboard-first one's.
     angle_deg : float
         Zig-zag rudder angle and heading trigger (deg).
 
@@ -275,7 +279,7 @@ def zigzag_metrics(res: ManeuverResult, sign: np.ndarray, angle_deg: float) -> d
         ``overshoot_1``, ``overshoot_2`` (deg), ``time_first_reversal``, ``time_overshoot_1``,
         ``time_overshoot_2`` (L/U_des), ``angle_deg``, ``maneuver`` (``'zigzag'``) and ``units``.
     """
-    psi = np.degrees(res.state("psi"))
+    psi = np.degrees(res.state("psi")) * (1.0 if sign[0] > 0 else -1.0)
     rev = np.flatnonzero(np.diff(sign) != 0) + 1  # samples after each rudder reversal
     if len(rev) < 3:
         raise RuntimeError("fewer than three rudder reversals; increase t_end")
