@@ -86,17 +86,10 @@ def write_params(path, theta: dict, *, verdict: str, summary: str) -> None:
     summary : str
         One line per environment (comment lines).
     """
-    lines = ["# modified sink-vortex parameters from `mmg-casadi tune apf` (tuning/cli_apf.py)",
-             f"# held-out verdict against the paper's values: {verdict.upper()}"]
-    if verdict != "improvement":
-        lines.append("# these values are NOT shown to be better than the paper's (K0_vor -10, Lambda -100, "
-                     "R_safe 15); keep the paper's unless you have another reason")
-    lines += [f"# {s}" for s in summary.splitlines() if s.strip()]
-    lines.append("[params]")
-    lines += [f"{k} = {float(theta[k])!r}" for k in ("k_vor0", "lam_sink", "r_safe")]
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines) + "\n")
+    judge.write_params(path, {k: theta[k] for k in ("k_vor0", "lam_sink", "r_safe")},
+                       title="modified sink-vortex parameters from `mmg-casadi tune apf` (tuning/cli_apf.py)",
+                       baseline="the paper's values", caveat="the paper's (K0_vor -10, Lambda -100, R_safe 15); keep "
+                       "the paper's unless you have another reason", verdict=verdict, summary=summary)
 
 
 def heldout(out, sets: dict, *, runs: int, envs, base_seed: int, workers=None) -> dict:

@@ -51,6 +51,7 @@ from mmg_casadi.montecarlo.study import check_resumable, check_study_args, run_s
 from mmg_casadi.params import PARAMETERS
 
 from .cli_apf import check_settings
+from .judge import write_params as judge_params
 
 METHOD = "colregs-vortex"
 
@@ -245,14 +246,10 @@ def write_params(path: Path, best: dict, *, verdict: str, summary: str) -> None:
     summary : str
         Comment lines.
     """
-    lines = ["# colregs-vortex thresholds from `mmg-casadi tune colregs` (tuning/colregs.py)",
-             f"# held-out verdict against the defaults: {verdict.upper()}"]
-    if verdict != "improvement":
-        lines.append("# these values are NOT shown to be better than the defaults; keep the defaults unless you "
-                     "have another reason")
-    lines += [f"# {s}" for s in summary.splitlines() if s.strip()]
-    lines += ["[params]", *[f"{k} = {float(best[k])!r}" for k in SEARCH_BOX]]
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    judge_params(path, {k: best[k] for k in SEARCH_BOX},
+                 title="colregs-vortex thresholds from `mmg-casadi tune colregs` (tuning/colregs.py)",
+                 baseline="the defaults", caveat="the defaults; keep the defaults unless you have another reason",
+                 verdict=verdict, summary=summary)
 
 
 def _markdown(report: dict) -> str:

@@ -28,6 +28,7 @@ Examples
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -170,3 +171,34 @@ def outcomes_from_rows(rows, method: str) -> dict:
                   "ce": np.array([r["ce"] for r in rs], float), "mcte": np.array([r["mcte"] for r in rs], float),
                   "failure": [r["failure"] for r in rs]}
     return res
+
+
+def write_params(path, values: dict, *, title: str, baseline: str, caveat: str, verdict: str, summary: str) -> None:
+    """A tuner's ``params.toml``: the values in a ``[params]`` table, the held-out verdict in comments above.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output file (its directory is made).
+    values : dict
+        Parameter name to value, in the order to write.
+    title : str
+        First comment line (what wrote the file).
+    baseline : str
+        What the values were judged against ("the paper's values").
+    caveat : str
+        Written after "these values are NOT shown to be better than" unless the verdict is an improvement.
+    verdict : str
+        ``"improvement"``, ``"no improvement"`` or ``"not judged"``.
+    summary : str
+        Comment lines.
+    """
+    lines = [f"# {title}", f"# held-out verdict against {baseline}: {verdict.upper()}"]
+    if verdict != "improvement":
+        lines.append(f"# these values are NOT shown to be better than {caveat}")
+    lines += [f"# {s}" for s in summary.splitlines() if s.strip()]
+    lines += ["[params]", *[f"{k} = {float(v)!r}" for k, v in values.items()]]
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
