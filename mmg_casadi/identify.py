@@ -198,7 +198,8 @@ class Identification:
         Each interval holds its own coefficient with the stated confidence; all ``p`` of them hold at once less
         often (for four weakly correlated estimates about 0.95⁴ ≈ 81 % of the time). With ``simultaneous=True``
         the intervals are widened by Bonferroni's rule so that they hold **all at once** with at least that
-        confidence: ``z = Φ⁻¹(1 − (1 − c)/(2p))`` with ``c = 2Φ(level_z) − 1`` (2.50 for four coefficients at 95 %).
+        confidence: ``z = Φ⁻¹(1 − (1 − c)/(2p))`` with ``c = 2Φ(level_z) − 1`` (2.50 for four coefficients at
+        95 %).
 
         Parameters
         ----------

@@ -340,11 +340,22 @@ def stop_pool(pool, timeout: float = 5.0) -> None:
         if proc.is_alive():
             proc.terminate()
     for proc in processes:
-        proc.join(timeout)
+        _reaped(proc, timeout)
     for proc in processes:  # e.g. SIGTERM arrived before the initializer restored its default action
-        if proc.is_alive():
+        if not _reaped(proc, 0.0):
             proc.kill()
-            proc.join(timeout)
+            _reaped(proc, timeout)
+
+
+def _reaped(proc, timeout: float) -> bool:
+    """Join ``proc`` for up to ``timeout`` s and say whether it has exited. The pool's own manager thread may reap
+    the same child at the same moment; ``join`` then returns at once without an exit code (the wait fails with
+    ECHILD) until that thread has stored it, so the exit code is polled until the deadline."""
+    deadline = time.monotonic() + timeout
+    proc.join(timeout)
+    while proc.exitcode is None and time.monotonic() < deadline:
+        time.sleep(0.005)
+    return proc.exitcode is not None
 
 
 def child_pids(pid: int | None = None) -> set[int]:

@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.closed_loop.simulation import simulate
 from mmg_casadi.colregs.duties import Duty, conflicts, excused_samples
-from mmg_casadi.colregs.kinematics import pair_geometry
+from mmg_casadi.colregs.kinematics import ground_velocity, pair_geometry
 from mmg_casadi.colregs.penalties import (delay_penalty, non_apparent_penalty, passing_distance_score,
                                           port_to_port_score, ramp, stand_on_penalty)
 from mmg_casadi.colregs.profiles import ScoringProfile, iitm_lab, ntnu_2023, scoring_profile
@@ -658,3 +658,23 @@ def test_classify_roles_sectors():
     roles = classify_roles(d([12.0, 14.0, 0.0, 0.0, 120.0]), d([-12.0, -12.0, 150.0, 150.0, 0.0]), 0.0, 0.0,
                            [1.0, 1.0, 1.0, 0.4, 0.4], [1.0, 1.0, 0.5, 0.5, 1.0], profile)
     assert roles.tolist() == ["head-on", "give-way", "overtaking", "stand-on", "overtaken"]
+
+
+@pytest.mark.parametrize("stop", [18.0, 20.0])
+def test_a_stand_on_ship_that_reaches_her_goal_mid_encounter_has_not_slowed(stop):
+    """The paper's crossing; the stand-on ship reaches her goal at ``stop`` (after the onset at 14.5) and keeps
+    her position. Her speed at the arrival sample is a one-sided difference of her sailing positions: she kept
+    course and speed (17(a)(i)). A central difference across the arrival halved it (scorer version 1: a 50 % speed
+    reduction, 17(a)(i) and 17(a)(ii) broken)."""
+    t = np.arange(0.0, 40.0, 0.25)
+    b = np.column_stack([25 + 0 * t, 25 - np.minimum(t, stop)])
+    pos = np.stack([np.column_stack([t, 0 * t]), b], axis=1)
+    psi = np.column_stack([0 * t, -np.pi / 2 + 0 * t])
+    active = np.column_stack([np.ones(t.size, bool), t <= stop])
+    (e,) = score_encounters(t, pos, psi, active=active, own=1)
+    assert (e.role, e.onset["t"]) == ("stand-on", 14.5)
+    assert e.rules["17a_i"].verdict and e.rules["17a_i"].terms["speed_decrease"] == 0.0
+    assert "17a_ii" not in e.rules  # she never acted
+    k = int(np.flatnonzero(t == stop)[0])
+    assert np.linalg.norm(ground_velocity(t, pos, active)[k, 1]) == pytest.approx(1.0)
+    assert np.linalg.norm(ground_velocity(t, pos)[k, 1]) == pytest.approx(0.5)  # what version 1 measured

@@ -22,6 +22,7 @@ from mmg_casadi.io import check_output
 from mmg_casadi.limits import (MAX_SHIP_STEPS, MAX_STUDY_RUNS, MAX_UNROLLED_SHIPS, check_steps, check_study_size,
                                max_workers)
 from mmg_casadi.montecarlo.results import FAILURES, ResultsTable
+from mmg_casadi.colregs.scorer import SCORER_VERSION
 from mmg_casadi.montecarlo.study import PARAMS_FILE, check_study_args, fingerprint, run_study
 from mmg_casadi.params import resolve
 from mmg_casadi.scenarios.scenario import scenario_from_dict
@@ -246,13 +247,21 @@ def test_rows_without_their_record_are_not_resumed(tmp_path):
     assert len(ResultsTable(tmp_path / "runs.csv").read()) == 1
 
 
-def test_a_table_of_an_older_version_is_checked_against_its_study_json(tmp_path):
+def test_a_table_scored_by_another_scorer_version_is_not_resumed(tmp_path):
+    """A table made before its record named the scorer (only a study.json), or by scorer version 1, would mix
+    verdicts of two scorers: refused in one message naming both versions, nothing written."""
     run_study(tmp_path, **KW)
-    (tmp_path / PARAMS_FILE).unlink()
-    with pytest.raises(InputError, match="params.kd"):
-        run_study(tmp_path, params={"kd": 3.0}, **{**KW, "runs": 2})
-    run_study(tmp_path, **{**KW, "runs": 2})
-    assert json.loads((tmp_path / PARAMS_FILE).read_text())["fingerprint"] == fingerprint(resolve())
+    assert json.loads((tmp_path / PARAMS_FILE).read_text())["scorer"] == SCORER_VERSION
+    record = json.loads((tmp_path / PARAMS_FILE).read_text())
+    before = (tmp_path / "runs.csv").read_bytes()
+    for older in ({**record, "scorer": 1}, None):
+        if older is None:
+            (tmp_path / PARAMS_FILE).unlink()  # an older table, checked against its study.json
+        else:
+            (tmp_path / PARAMS_FILE).write_text(json.dumps(older))
+        with pytest.raises(InputError, match=f"scorer of version {SCORER_VERSION} .this one was scored by version 1"):
+            run_study(tmp_path, **{**KW, "runs": 2})
+        assert (tmp_path / "runs.csv").read_bytes() == before
 
 
 def test_range_mismatch_on_resume_names_both_ranges(tmp_path, capsys):

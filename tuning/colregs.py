@@ -258,7 +258,8 @@ def _markdown(report: dict) -> str:
     lines = [f"# tune colregs: verdict **{verdict}**", "",
              f"Design: runs 0-{report['design'] - 1} of environments {report['envs']}, seed {report['seed']}; "
              f"{len(report['candidates'])} candidates (the defaults, a Latin hypercube of seed "
-             f"{report['search_seed']}, {report['refine']} coordinate sweep(s)); objective = compliance − {report['failure_weight']:g} × failure rate.", "",
+             f"{report['search_seed']}, {report['refine']} coordinate sweep(s)); objective = compliance − "
+             f"{report['failure_weight']:g} × failure rate.", "",
              "| candidate | success | compliance | stand-on | give-way | objective |", "|---|---|---|---|---|---|"]
     for c in report["candidates"]:
         lines.append(f"| {c['candidate']} | {c['success']:.4f} | {c['compliance']:.4f} | {c['stand_on']:.4f} | "

@@ -20,8 +20,12 @@ from mmg_casadi.colregs.geometry import wrap_to_pi
 from mmg_casadi.colregs.score import cpa_tcpa
 
 
-def ground_velocity(t, pos) -> np.ndarray:
+def ground_velocity(t, pos, active=None) -> np.ndarray:
     """Velocity over the ground from positions: the time derivative along the first axis (central differences).
+
+    With ``active``, a ship's velocity is differenced within each stretch in which she sails: at the last sample
+    before she stops (and the first after she starts) the difference is one-sided, so the positions she keeps
+    after reaching her goal do not halve her speed at the sample she arrives.
 
     Parameters
     ----------
@@ -29,6 +33,8 @@ def ground_velocity(t, pos) -> np.ndarray:
         Sample times (L/U), increasing, at least two.
     pos : array-like (T, ..., 2)
         Positions (L).
+    active : array-like of bool (T, ...), optional
+        Whether each ship sails at each sample (default: throughout).
 
     Returns
     -------
@@ -40,11 +46,29 @@ def ground_velocity(t, pos) -> np.ndarray:
     >>> t = np.array([0.0, 1.0, 2.0])
     >>> ground_velocity(t, np.array([[0.0, 0.0], [1.0, 0.5], [2.0, 1.0]])).tolist()
     [[1.0, 0.5], [1.0, 0.5], [1.0, 0.5]]
+
+    A ship that arrives at sample 2 and keeps her position after it:
+
+    >>> t = np.arange(5.0)
+    >>> pos = np.array([[0.0], [1.0], [2.0], [2.0], [2.0]])[:, :, None] * [1.0, 0.0]
+    >>> ground_velocity(t, pos)[:, 0, 0].tolist(), ground_velocity(t, pos, [[1], [1], [1], [0], [0]])[:3, 0, 0].tolist()
+    ([1.0, 1.0, 0.5, 0.0, 0.0], [1.0, 1.0, 1.0])
     """
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or t.size < 2:
         raise ValueError(f"t: expected at least two sample times, got {t.size}")
-    return np.gradient(np.asarray(pos, dtype=float), t, axis=0)
+    pos = np.asarray(pos, dtype=float)
+    vel = np.gradient(pos, t, axis=0)
+    if active is None or t.size < 3:
+        return vel
+    a = np.asarray(active, dtype=bool)
+    dt = np.diff(t).reshape((-1,) + (1,) * (pos.ndim - 1))
+    step = np.diff(pos, axis=0) / dt  # step[k]: from sample k to k + 1
+    inner = a[1:-1]
+    last = inner & a[:-2] & ~a[2:]  # sails at k and k - 1, not at k + 1
+    first = inner & a[2:] & ~a[:-2]
+    vel[1:-1] = np.where(last[..., None], step[:-1], np.where(first[..., None], step[1:], vel[1:-1]))
+    return vel
 
 
 @dataclass(frozen=True)

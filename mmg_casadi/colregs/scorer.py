@@ -33,6 +33,12 @@ from mmg_casadi.colregs.roles import ENCOUNTER_OF_ROLE, GIVE_WAY_ROLES
 from mmg_casadi.colregs.stand_on_rules import stand_on_rules
 from mmg_casadi.colregs.verdict import RULES, json_value
 
+SCORER_VERSION = 2
+"""Version of the verdicts :func:`score_encounters` gives: a statistics table records it and is resumed only by the
+same version. 2: a ship's speed at the sample she stops (reaches her goal) is a one-sided difference of her
+positions (:func:`~mmg_casadi.colregs.kinematics.ground_velocity` with ``active``); version 1 halved it there, which
+counted her arrival as a speed reduction."""
+
 
 @dataclass(frozen=True)
 class Encounter:
@@ -129,9 +135,11 @@ def _as_arrays(t, pos, psi, speed, active):
     psi = np.asarray(psi, dtype=float)
     if psi.shape != (t.size, n):
         raise ValueError(f"psi: expected shape ({t.size}, {n}), got {psi.shape}")
-    vel = ground_velocity(t, pos)
-    speed = np.linalg.norm(vel, axis=2) if speed is None else np.asarray(speed, dtype=float)
     active = np.ones((t.size, n), dtype=bool) if active is None else np.asarray(active, dtype=bool)
+    if active.shape != (t.size, n):
+        raise ValueError(f"active: expected shape ({t.size}, {n}), got {active.shape}")
+    vel = ground_velocity(t, pos, active)
+    speed = np.linalg.norm(vel, axis=2) if speed is None else np.asarray(speed, dtype=float)
     for name, a in (("speed", speed), ("active", active)):
         if a.shape != (t.size, n):
             raise ValueError(f"{name}: expected shape ({t.size}, {n}), got {a.shape}")

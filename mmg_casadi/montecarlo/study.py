@@ -52,6 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mmg_casadi.colregs.scorer import SCORER_VERSION
 from mmg_casadi.errors import InputError
 from mmg_casadi.guidance import methods as method_registry
 from mmg_casadi.io import json_safe, write_json
@@ -361,7 +362,9 @@ def _stored_record(out: Path, table: ResultsTable) -> dict:
 
 def check_resumable(out, *, runs: int, envs, methods, base_seed: int, params: dict,
                     ranges: DisturbanceRanges = DisturbanceRanges()) -> set:
-    """Refuse to add runs to ``out/runs.csv`` that would not be comparable with the rows it holds; writes nothing.
+    """Refuse to add runs to ``out/runs.csv`` that would not be comparable with the rows it holds (other seed,
+    parameters, disturbance ranges or COLREG scorer version, :data:`~mmg_casadi.colregs.scorer.SCORER_VERSION`);
+    writes nothing.
 
     The seed is a column of every row; the resolved parameters and the disturbance ranges are not, so they are
     compared with the table's side file :data:`PARAMS_FILE` (written before the table's first row): a table
@@ -399,6 +402,10 @@ def check_resumable(out, *, runs: int, envs, methods, base_seed: int, params: di
                                  "output directory)", base_seed)
             done.add((row["environment"], row["method"], row["run"]))
     record = _stored_record(out, table)
+    if record.get("scorer", 1) != SCORER_VERSION:
+        raise InputError(str(table.path), f"a table scored by the COLREG scorer of version {SCORER_VERSION} (this one "
+                         f"was scored by version {record.get('scorer', 1)}; use a new output directory)",
+                         record.get("scorer", 1))
     if record.get("fingerprint") == fingerprint(params, ranges):
         return done
     key = diff(record["params"], params)
@@ -417,12 +424,10 @@ def _record_study_params(out: Path, params: dict, ranges: DisturbanceRanges) -> 
     """Write the record of a table that has no rows yet (its side file :data:`PARAMS_FILE`, atomically, before
     the first row is appended; and ``study.json``); a table with rows keeps the record it was made with."""
     table = ResultsTable(out / "runs.csv")
-    if table.path.exists() and table.read():
-        if not (out / PARAMS_FILE).exists():  # a table of an older version, checked against its study.json
-            write_json(out / PARAMS_FILE, {"fingerprint": fingerprint(params, ranges), "params": params,
-                                           "disturbance": ranges.to_dict()})
+    if table.path.exists() and table.read():  # resumed: check_resumable accepted the record it has
         return
-    record = {"fingerprint": fingerprint(params, ranges), "params": params, "disturbance": ranges.to_dict()}
+    record = {"fingerprint": fingerprint(params, ranges), "params": params, "disturbance": ranges.to_dict(),
+              "scorer": SCORER_VERSION}
     write_json(out / PARAMS_FILE, record)
     write_json(out / "study.json", {"params": params, "disturbance": ranges.to_dict()})
 
