@@ -407,6 +407,7 @@ def _gauss_newton(step: ca.Function, data, fits, est, sig, lo, hi, *, polish: bo
     z = ca.vertcat(*x0s, theta)
     r = ca.vertcat(*res)
     fn = ca.Function("gn", [z], [r, ca.jacobian(r, z)])
+    residual = ca.Function("gn_r", [z], [r])  # the line search needs no Jacobian
     z0 = np.concatenate([f[0] for f in fits] + [est])
     rv, Jm = (np.array(a) for a in fn(z0))
     rv = rv.ravel()
@@ -415,7 +416,7 @@ def _gauss_newton(step: ca.Function, data, fits, est, sig, lo, hi, *, polish: bo
         dz = -np.linalg.lstsq(Jm, rv, rcond=None)[0]
         for _ in range(30):
             z1 = z0 + dz
-            r1 = np.array(fn(z1)[0]).ravel()
+            r1 = np.array(residual(z1)).ravel()
             if np.all((lo <= z1[-p:]) & (z1[-p:] <= hi)) and r1 @ r1 <= rv @ rv:
                 break
             dz = 0.5 * dz

@@ -45,16 +45,21 @@ def _flat_api() -> set[str]:
     return names
 
 
-def public_functions():
-    """(qualified name, function) of every public function of every public module, as the API pages list them."""
+def public_modules():
+    """Every public module of :data:`PACKAGES` (no part of its name starts with ``_``), the packages first."""
     for pkg in PACKAGES:
         root = importlib.import_module(pkg)
-        mods = [root] + [importlib.import_module(m.name) for m in pkgutil.walk_packages(root.__path__, f"{pkg}.")
-                         if not any(part.startswith("_") for part in m.name.split("."))]
-        for mod in mods:
-            for name, obj in vars(mod).items():
-                if not name.startswith("_") and inspect.isfunction(obj) and obj.__module__ == mod.__name__:
-                    yield f"{mod.__name__}.{name}", obj
+        yield root
+        yield from (importlib.import_module(m.name) for m in pkgutil.walk_packages(root.__path__, f"{pkg}.")
+                    if not any(part.startswith("_") for part in m.name.split(".")))
+
+
+def public_functions():
+    """(qualified name, function) of every public function of every public module, as the API pages list them."""
+    for mod in public_modules():
+        for name, obj in vars(mod).items():
+            if not name.startswith("_") and inspect.isfunction(obj) and obj.__module__ == mod.__name__:
+                yield f"{mod.__name__}.{name}", obj
 
 
 def test_debt_list_only_shrinks():
@@ -86,18 +91,14 @@ def test_public_function_finder_sees_the_flat_api():
 def public_methods():
     """(qualified name, function) of every documented public method (static and class methods included) of every
     public class of every public module, as the API pages list them (``:members:``: those with a docstring)."""
-    for pkg in PACKAGES:
-        root = importlib.import_module(pkg)
-        mods = [root] + [importlib.import_module(m.name) for m in pkgutil.walk_packages(root.__path__, f"{pkg}.")
-                         if not any(part.startswith("_") for part in m.name.split("."))]
-        for mod in mods:
-            for name, cls in vars(mod).items():
-                if name.startswith("_") or not inspect.isclass(cls) or cls.__module__ != mod.__name__:
-                    continue
-                for attr, member in vars(cls).items():
-                    func = member.__func__ if isinstance(member, (staticmethod, classmethod)) else member
-                    if not attr.startswith("_") and inspect.isfunction(func) and func.__doc__:
-                        yield f"{mod.__name__}.{cls.__qualname__}.{attr}", func
+    for mod in public_modules():
+        for name, cls in vars(mod).items():
+            if name.startswith("_") or not inspect.isclass(cls) or cls.__module__ != mod.__name__:
+                continue
+            for attr, member in vars(cls).items():
+                func = member.__func__ if isinstance(member, (staticmethod, classmethod)) else member
+                if not attr.startswith("_") and inspect.isfunction(func) and func.__doc__:
+                    yield f"{mod.__name__}.{cls.__qualname__}.{attr}", func
 
 
 def _section(doc: str, title: str) -> list[tuple[str, list[str]]] | None:

@@ -133,17 +133,19 @@ def _as_arrays(t, pos, psi, speed, active):
     if pos.shape != (t.size, n, 2):
         raise ValueError(f"pos: expected shape ({t.size}, N, 2) like t, got {pos.shape}")
     psi = np.asarray(psi, dtype=float)
-    if psi.shape != (t.size, n):
-        raise ValueError(f"psi: expected shape ({t.size}, {n}), got {psi.shape}")
     active = np.ones((t.size, n), dtype=bool) if active is None else np.asarray(active, dtype=bool)
-    if active.shape != (t.size, n):
-        raise ValueError(f"active: expected shape ({t.size}, {n}), got {active.shape}")
+    _check_shape(t.size, n, psi=psi, active=active)  # active before the velocities, which difference within it
     vel = ground_velocity(t, pos, active)
     speed = np.linalg.norm(vel, axis=2) if speed is None else np.asarray(speed, dtype=float)
-    for name, a in (("speed", speed), ("active", active)):
-        if a.shape != (t.size, n):
-            raise ValueError(f"{name}: expected shape ({t.size}, {n}), got {a.shape}")
+    _check_shape(t.size, n, speed=speed)
     return t, pos, psi, vel, speed, active
+
+
+def _check_shape(samples: int, ships: int, **arrays) -> None:
+    """Raise ValueError naming the first of ``arrays`` whose shape is not ``(samples, ships)``."""
+    for name, a in arrays.items():
+        if a.shape != (samples, ships):
+            raise ValueError(f"{name}: expected shape ({samples}, {ships}), got {a.shape}")
 
 
 def _run_start(both, k) -> int:
