@@ -678,3 +678,32 @@ def test_a_stand_on_ship_that_reaches_her_goal_mid_encounter_has_not_slowed(stop
     k = int(np.flatnonzero(t == stop)[0])
     assert np.linalg.norm(ground_velocity(t, pos, active)[k, 1]) == pytest.approx(1.0)
     assert np.linalg.norm(ground_velocity(t, pos)[k, 1]) == pytest.approx(0.5)  # what version 1 measured
+
+
+def _sailed(psi, start, speed, dt):
+    """Positions of a ship sailing headings ``psi`` at ``speed`` from ``start`` (trapezoidal)."""
+    v = speed * np.column_stack([np.cos(psi), np.sin(psi)])
+    return np.vstack([start, start + np.cumsum(0.5 * dt * (v[1:] + v[:-1]), axis=0)])
+
+
+@pytest.mark.parametrize("side_deg, crossed", [(-2.0, False), (2.0, True)])
+def test_a_turn_of_the_stand_on_ship_that_sweeps_her_course_line_is_no_crossing_ahead(side_deg, crossed):
+    """A crossing from 35° on the own starboard bow, 11 L off, the target (0.8 U) heading within 2° of the own
+    ship; the own ship turns 90° to starboard from t = 0.5 and the target alters 10° to starboard at t = 1.5.
+    With the target's line 2° to the own ship's left (-2°) the target's turn sweeps her course line across the
+    own ship: no crossing ahead (version 2 counted one 7.1 L ahead). With it 2° to the right (+2°) the own
+    ship's turn carries her across the line 10 L ahead: one crossing (version 2 also counted the target's line
+    sweeping back over her, 8.0 L ahead)."""
+    dt = 0.25
+    t = np.arange(0.0, 40.0, dt)
+    psi = np.radians(90.0) * np.clip((t - 0.5) / 4.0, 0.0, 1.0)
+    start = 11.0 * np.array([np.cos(np.radians(35.0)), np.sin(np.radians(35.0))])
+    psi_t = math.atan2(-start[1], -start[0]) + np.radians(side_deg) + np.radians(10.0) * np.clip(t - 1.5, 0.0, 1.0)
+    pos = np.stack([_sailed(psi, np.zeros(2), 1.0, dt), _sailed(psi_t, start, 0.8, dt)], axis=1)
+    (e,) = score_encounters(t, pos, np.column_stack([psi, psi_t]), own=0)
+    assert e.role == "give-way" and e.rules["16"].verdict
+    ahead = e.rules["15"].terms["crossed_ahead_at"]
+    assert e.rules["15"].verdict is not crossed
+    assert len(ahead) == (1 if crossed else 0)
+    if crossed:
+        assert ahead[0] == pytest.approx(9.95, abs=0.05)

@@ -124,9 +124,11 @@ def measure_manoeuvre(psi, speed, window, reference, speed_ref, speed_max, *, co
 def course_line_crossings(pos_own, pos_other, psi_other, window) -> np.ndarray:
     """Where the own ship crossed the other ship's course line within ``window``: the distances ahead (L).
 
-    The course line runs through the other ship along her heading. A crossing is a change of side
-    (``h × (p_own − p_other)``, zeros skipped) between consecutive samples; its distance along the line is
-    interpolated linearly, positive ahead of the other ship, negative astern.
+    The course line runs through the other ship along her heading. A crossing is the own ship's change of side
+    between consecutive samples (zeros skipped), judged against the line as it was at the earlier sample
+    (``h × (p_own − p_other)`` with that sample's heading ``h`` at both): a turn of the other ship that sweeps her
+    line across the own ship is her manoeuvre, not a crossing by the own ship (scorer version 3). Its distance
+    along that line is interpolated linearly, positive ahead of the other ship, negative astern.
 
     Parameters
     ----------
@@ -150,6 +152,13 @@ def course_line_crossings(pos_own, pos_other, psi_other, window) -> np.ndarray:
     >>> pos = np.column_stack([np.full(5, 3.0), np.linspace(-2.0, 2.0, 5)])
     >>> course_line_crossings(pos, np.zeros((5, 2)), np.zeros(5), np.arange(5)).tolist()
     [3.0]
+
+    The own ship lies still, 3 L ahead of the other and 1.5 L to her starboard, while the other turns 40° to
+    starboard, her course line sweeping through the own ship: no crossing by the own ship.
+
+    >>> psi = np.radians(np.linspace(0.0, 40.0, 5))
+    >>> course_line_crossings(np.tile([3.0, 1.5], (5, 1)), np.zeros((5, 2)), psi, np.arange(5)).tolist()
+    []
     """
     window = np.asarray(window, dtype=int)
     if window.size < 2:
@@ -162,7 +171,11 @@ def course_line_crossings(pos_own, pos_other, psi_other, window) -> np.ndarray:
     k = np.arange(side.size)
     last = np.maximum.accumulate(np.where(side != 0.0, k, -1))
     prev = np.concatenate([[-1], last[:-1]])
-    cross = (side != 0.0) & (prev >= 0) & (np.sign(side) * np.sign(side[np.maximum(prev, 0)]) < 0.0)
+    j0 = np.maximum(prev, 0)
+    # the later sample against the earlier sample's line
+    side_then = h[j0, 0] * rel[:, 1] - h[j0, 1] * rel[:, 0]
+    along_then = np.einsum("ij,ij->i", h[j0], rel)
+    cross = (side != 0.0) & (prev >= 0) & (np.sign(side_then) * np.sign(side[j0]) < 0.0)
     j, i = prev[cross], k[cross]
-    f = side[j] / (side[j] - side[i])
-    return along[j] + f * (along[i] - along[j])
+    f = side[j] / (side[j] - side_then[i])
+    return along[j] + f * (along_then[i] - along[j])

@@ -33,11 +33,14 @@ from mmg_casadi.colregs.roles import ENCOUNTER_OF_ROLE, GIVE_WAY_ROLES
 from mmg_casadi.colregs.stand_on_rules import stand_on_rules
 from mmg_casadi.colregs.verdict import RULES, json_value
 
-SCORER_VERSION = 2
+SCORER_VERSION = 3
 """Version of the verdicts :func:`score_encounters` gives: a statistics table records it and is resumed only by the
 same version. 2: a ship's speed at the sample she stops (reaches her goal) is a one-sided difference of her
 positions (:func:`~mmg_casadi.colregs.kinematics.ground_velocity` with ``active``); version 1 halved it there, which
-counted her arrival as a speed reduction."""
+counted her arrival as a speed reduction. 3: a crossing of the other ship's course line (Rules 13 and 15) is the own
+ship's change of side of the line as it was at the earlier sample
+(:func:`~mmg_casadi.colregs.manoeuvre.course_line_crossings`); versions 1 and 2 also counted the other ship's turn
+that swept her course line across the own ship as the own ship crossing ahead."""
 
 
 @dataclass(frozen=True)
