@@ -260,7 +260,8 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "collision distance of clearance, as the iitm-lab scoring profile's gate", "colregs-vortex", low_open=True),
     _P("cv_d_clear", 6.0, 0.0, None, "L", "a give-way ship holds its alteration until the planned-course passing "
        "distance exceeds this", "our choice: 3 collision distances", "colregs-vortex", low_open=True),
-    _P("cv_v_ship_min", 0.05, 0.0, None, "U", "slower neighbours are static obstacles without a COLREG role",
+    _P("cv_v_ship_min", 0.05, 0.0, None, "U", "slower neighbours are static obstacles without a COLREG role, and a "
+       "ship that closes more slowly than this is past (alongside on a parallel course her CPA never comes)",
        "our choice: below the slowest ship speed a scenario allows (0.2)", "colregs-vortex", low_open=True),
     _P("cv_r_guard", 5.0, 0.0, None, "L", "range inside which every neighbour also repels radially (last resort)",
        "our choice: about the KCS's advance in a 90° turn plus the collision distance", "colregs-vortex",
@@ -279,6 +280,12 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("cv_dpsi_cq_deg", 45.0, 0.0, 180.0, "deg", "the filter judges the heading the ship turns through next, at most "
        "this far from its own on the way to the field's", "our choice: about the KCS's turn in half of cv_t_close; "
        "beyond 10° of heading error the PD's rudder is saturated anyway", "colregs-vortex", low_open=True),
+    _P("cv_dpsi_free_deg", 15.0, 0.0, 180.0, "deg", "while a neighbour is within R_safe but nothing is avoided, "
+       "the heading ordered is at most this far from the present one (a moderate turn; 180 = no limit)",
+       "measured: the largest order ahead, in 5° steps, from whose steady turn (11.4°/(L/U)) the KCS under the "
+       "closed loop's PD swings on by less than 10° when ordered to check her swing (6.9°; 20° ahead: 10.0°), the "
+       "smallest alteration Cockcroft & Lameijer (p. 51) count as readily apparent (tests/test_colregs_vortex.py)",
+       "colregs-vortex", low_open=True),
     _P("cv_speed_cut", 0.5, 0.0, 1.0, "", "fraction of the propeller speed a stand-on ship takes off while she acts "
        "alone for a ship crossing from port (Rule 17(a)(ii), with the starboard escape)", "Hagen et al. 2023 "
        "(evaluator.yaml) delta_speed_reduction_app: a 50 % speed reduction is readily apparent", "colregs-vortex",

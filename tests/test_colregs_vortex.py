@@ -187,3 +187,65 @@ def test_paper_encounters_stay_collision_free(name):
     m = run_scenario(sc).metrics
     assert not m["collision"]
     assert all(s["status"] == "reached" for s in m["ships"])
+
+
+
+@pytest.mark.parametrize("goal, nb_pos, nb_vel, dpsi_free, expected", [
+    ([0.0, 50.0], [6.0, 6.0], [0.1, 0.0], math.radians(15.0), 15.0),  # nothing avoided: a moderate turn
+    ([0.0, 50.0], [6.0, 6.0], [0.1, 0.0], math.pi, 90.0),  # no limit (the direct call's default)
+    (FAR_GOAL, [12.0, 0.0], [-1.0, 0.0], math.radians(15.0), 53.0),  # head-on at 12 L: the give-way turn as before
+])
+def test_a_ship_free_of_encounters_turns_at_a_moderate_rate(goal, nb_pos, nb_vel, dpsi_free, expected):
+    """Own ship at the origin heading 0 at speed 1. Goal 50 L on her starboard beam and a slow ship at (6, 6), no
+    risk of collision and no encounter: the field turns her towards the goal, at most cv_dpsi_free_deg from her
+    present heading. A ship head-on at 12 L: the give-way duty turns her as without the limit."""
+    v = colregs_vortex([0.0, 0.0], 0.0, [1.0, 0.0], goal, ca.DM(nb_pos).reshape((2, 1)),
+                       ca.DM(nb_vel).reshape((2, 1)), [1.0], **(KW | {"dpsi_free": dpsi_free}))
+    assert math.degrees(float(heading_of(v))) == pytest.approx(expected, abs=0.5)
+
+
+def test_the_kcs_checks_a_moderate_turn_within_ten_degrees():
+    """The source of cv_dpsi_free_deg = 15°: the KCS under the closed loop's PD (its kp, kd and rudder limit) in the
+    steady turn of an order that stays 15° ahead of her heading turns at about 11.4°/(L/U); ordered to check her
+    swing (the order becomes her heading then) she swings on by less than 10°, the smallest alteration that is
+    readily apparent; from an order 20° ahead by 10° or more, and at full rate (90° ahead) by about 18°."""
+    from mmg_casadi.guidance.heading_control import pd_heading
+    from mmg_casadi.params import PARAMETERS
+    from mmg_casadi.vessel.mmg import build_mmg, propeller_rpm_for_speed, rk4
+    from mmg_casadi.vessel.ship import load_kcs
+
+    ship = load_kcs()
+    dt = 0.05
+    x, order = ca.SX.sym("x", 7), ca.SX.sym("order")
+    rudder = pd_heading(x[5], order, x[2], PARAMETERS["kp"].default, PARAMETERS["kd"].default,
+                        math.radians(PARAMETERS["delta_max_deg"].default))
+    step = ca.Function("step", [x, order], [rk4(build_mmg(ship), x, (rudder, propeller_rpm_for_speed(1.0, ship)),
+                                                    dt)])
+
+    def swing_on(ahead_deg):
+        state = np.array([1.0, 0, 0, 0, 0, 0, 0])
+        for _ in range(int(15.0 / dt)):  # the steady turn
+            state = np.array(step(state, state[5] + math.radians(ahead_deg))).ravel()
+        rate, start, swing = state[2], state[5], 0.0
+        for _ in range(int(15.0 / dt)):  # checked
+            state = np.array(step(state, start)).ravel()
+            swing = max(swing, state[5] - start)
+        return math.degrees(rate), math.degrees(swing)
+
+    rate, swing = swing_on(PARAMETERS["cv_dpsi_free_deg"].default)
+    assert rate == pytest.approx(11.4, abs=0.3) and 5.0 < swing < 10.0
+    assert swing_on(20.0)[1] > 9.9 and swing_on(90.0)[1] > 17.0
+
+
+@pytest.mark.parametrize("drift, holding", [(0.02, 0.0), (0.2, 1.0)])
+def test_a_ship_alongside_that_hardly_closes_is_past(drift, holding):
+    """A ship 10 L abeam to port on a parallel course, closing at ``drift`` (U): at 0.02 U (below cv_v_ship_min)
+    her CPA lies 500 L/U ahead and never comes, so she is past and no longer held for (without this two ships
+    stood on for each other alongside for ever: Imazu case 10, all ships avoiding); at 0.2 U she is still a risk
+    and the stand-on ship keeps her course."""
+    from mmg_casadi.guidance.colregs_encounters import STAND_ON
+
+    t = colregs_vortex_terms([0.0, 0.0], 0.0, [1.0, 0.0], FAR_GOAL, ca.DM([[0.0], [-10.0]]),
+                             ca.DM([[1.0], [drift]]), code=[STAND_ON],
+                             **({k: v for k, v in MV_KW.items() if k != "lam_sink"} | CV.as_dict()))
+    assert float(t["holding"]) == holding and float(t["risk"]) == holding

@@ -191,10 +191,17 @@ def test_the_shipped_ais_sample_is_synthetic_and_replays_exactly(tmp_path, capsy
 
 
 def test_the_packaged_replay_gives_way_to_the_replayed_target(tmp_path):
+    """The own ship (colregs-vortex) gives way to the replayed target and rejoins her track ahead: her route's
+    waypoints are 1.9 L apart and those she passed abeam while giving way count as passed, so she never turns back
+    (her heading stays within 90° of her northbound track; turning back to them she looped and arrived 17.5 L/U
+    later)."""
     assert main(["simulate", "ais_replay", "--out", str(tmp_path)]) == 0
     m = json.loads((tmp_path / "metrics.json").read_text())
     own, target = m["ships"]
     assert not m["collision"] and own["status"] == "reached" and target["method"] == "replay"
+    z = np.load(tmp_path / "trajectory.npz")
+    psi = z["states"][:, 0, list(z["state_names"]).index("psi")]
+    assert np.max(np.abs(psi)) < math.pi / 2
     pair = m["pairs"][0]
     assert pair["min_distance"] == pytest.approx(3.96, abs=0.01)
     enc = pair["encounters"]["a"][0]

@@ -284,6 +284,12 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     y_int_next = Xi[S_["y_int"]] + dt * terms["y_int_dot"] * (1 - w_react)
     pos_next = ca.vertcat(xm_next[S_["x"]], xm_next[S_["y"]])
     idx_next, reached = switch_waypoint(pos_next, Pi["path"], Xi[S_["idx"]], Pi["n_path"], P["goal_tolerance"])
+    if spec.goal_capture:
+        # a waypoint before the final one that the ship passed abeam outside the acceptance radius (avoiding
+        # something) counts as passed: she does not turn back to it
+        abeam = ca.logic_and(Xi[S_["idx"]] < Pi["n_path"] - 1.5,
+                             terms["x_e"] > ca.norm_2(terms["wp_next"] - terms["wp_prev"]))
+        idx_next = ca.if_else(ca.logic_and(abeam, idx_next < Xi[S_["idx"]] + 0.5), Xi[S_["idx"]] + 1, idx_next)
     t_next = t + dt
 
     u_n, v_n, r_n, x_n, y_n = (xm_next[S_[k]] for k in ("u", "v", "r", "x", "y"))

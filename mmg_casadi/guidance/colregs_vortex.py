@@ -2,11 +2,12 @@
 extended with what a watch officer does and the paper leaves out.
 
 Per neighbour (one column of ``nb_pos`` / ``nb_vel``; conventions and shapes as in :mod:`mmg_casadi.guidance.fields`).
-Velocities are over the ground; a neighbour slower than ``v_ship_min`` is a static obstacle without a COLREG role.
+Velocities are over the ground; a neighbour slower than ``v_ship_min`` is a static obstacle without a COLREG role,
+and a ship is *past* once the range opens or closes more slowly than ``v_ship_min``.
 The own ship's *planned course* is the bearing of its next waypoint at its current speed: what it resumes.
 
 - **Encounters with a memory** (:mod:`mmg_casadi.guidance.colregs_encounters`). A ship within R_safe whose
-  straight-line passing distance at the present velocities is below ``d_risk`` while the range closes is a risk
+  straight-line passing distance at the present velocities is below ``d_risk`` while she is not past is a risk
   of collision (Rule 7). At its onset the own ship's role is judged against her *actual* heading and the
   bearings, as the encounter scorer judges it (:mod:`mmg_casadi.colregs.roles`): overtaking, overtaken,
   head-on (Rule 14(c): a ship nearly ahead that has the own ship nearly ahead is head-on, in doubt), give-way
@@ -51,6 +52,12 @@ The own ship's *planned course* is the bearing of its next waypoint at its curre
   is evaluated at max(distance to the goal, distance to the nearest avoided neighbour, ``d_att_floor``): by
   default the goal never attracts more strongly than a goal at the edge of R_safe, so the vortex of a ship or of
   an obstacle near the goal keeps its weight and the obstacle is passed on the vortex's side.
+- **A moderate turn while free of encounters**: while a neighbour is within R_safe but nothing is avoided and
+  nothing is within ``r_cq`` (where the close-quarters filter needs its whole reach), the field's heading is at
+  most ``dpsi_free`` from the present one, so the ship turns back to her course (or towards her goal) at a
+  moderate rate. A risk of collision that arises mid-turn then finds her with a swing she can check within 10°
+  (:class:`ColregsVortexParams`); at full rate she swings on past the heading she had at its onset, which as
+  stand-on or head-on ship breaks 17(a)(i) or Rule 14.
 - **Guard**: inside ``r_guard`` every neighbour also pushes radially, λ_guard (1/d − 1/r_guard), a last-resort
   term for whatever the rules above did not resolve.
 - **Close quarters** (Rule 17(b) "best aid to avoid collision", Rule 2(b) departure to avoid immediate danger):
@@ -134,8 +141,8 @@ class ColregsVortexParams:
         while the range closes (L, > 0); 4 L = twice the paper's 2 L collision distance, as the iitm-lab
         scoring profile's gate.
     v_ship_min : float
-        Neighbours slower than this are static obstacles without COLREG role (U, > 0); 0.05 is below the
-        slowest ship speed a scenario allows (0.2).
+        Neighbours slower than this are static obstacles without COLREG role, and a ship that closes more slowly
+        than this is past (U, > 0); 0.05 is below the slowest ship speed a scenario allows (0.2).
     r_guard : float
         Range inside which every neighbour also repels radially (L, > 0); 5 L = 2.5 collision distances, about
         the KCS's advance in a full-rudder 90° turn plus the collision distance.
@@ -170,6 +177,12 @@ class ColregsVortexParams:
         next avoids the collision cones within ``r_cq`` at her present speed but one does at the reduced speed
         ([0, 1]; 1 takes all the way off the engine allows, dead slow ahead), Rules 17(b) and 8(e); 0, off, for
         the same reason.
+    dpsi_free : float
+        While a neighbour is within R_safe but nothing is avoided and nothing is within ``r_cq``, the field's
+        heading is at most this far from the present heading (rad, (0, π]; π: no limit); 15°: the largest order
+        ahead (in 5° steps) from whose steady turn the KCS under the closed loop's PD, ordered to check her swing,
+        swings on by less than 10° (6.9°, at 11.4°/(L/U); 20° ahead: 10.0°), the smallest alteration Cockcroft &
+        Lameijer (p. 51) count as readily apparent.
     """
 
     theta_head_on: float = param_field("cv_theta_head_on_deg", math.pi / 180.0)
@@ -191,6 +204,7 @@ class ColregsVortexParams:
     speed_cut: float = param_field("cv_speed_cut")
     speed_giveway: float = param_field("cv_speed_giveway")
     speed_extremis: float = param_field("cv_speed_extremis")
+    dpsi_free: float = param_field("cv_dpsi_free_deg", math.pi / 180.0)
 
     def __post_init__(self):
         check_fields(self)
@@ -241,7 +255,7 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
                          theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear,
                          v_ship_min, r_guard, lam_guard, d_risk=PARAMETERS["cv_d_risk"].default, speed_cut=None,
                          speed_giveway=None, speed_extremis=None, d_att_floor=None, r_cq=None, d_cq=None,
-                         dpsi_cq=None, code=None, reference=None):
+                         dpsi_cq=None, dpsi_free=None, code=None, reference=None):
     """Per-neighbour quantities of :func:`colregs_vortex` (each a 1×M row unless stated).
 
     Keys: ``beta`` (bearing from the own bow), ``d``, ``ship`` (1 for a moving neighbour), ``risk`` (Rule 7 now),
@@ -253,7 +267,7 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     strength), ``threat`` (1 where the Rule 8 minimum alteration applies), ``slow`` (1 where the stand-on action
     includes the speed reduction), ``guard`` (radial push strength), ``avoid`` (1 where the neighbour is being
     avoided), ``escalate`` (1 while a give-way ship's alteration alone still leads into close quarters). The
-    speed cuts, ``d_att_floor``, ``r_cq``, ``d_cq`` and ``dpsi_cq`` are accepted so that
+    speed cuts, ``d_att_floor``, ``r_cq``, ``d_cq``, ``dpsi_cq`` and ``dpsi_free`` are accepted so that
     :meth:`ColregsVortexParams.as_dict` can be passed whole; only :func:`colregs_vortex` uses them.
 
     Parameters
@@ -280,7 +294,7 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
         The remaining COLREG thresholds of :class:`ColregsVortexParams`.
     d_risk : float, optional
         Passing distance below which a closing ship is a risk of collision (L; the table's ``cv_d_risk``).
-    speed_cut, speed_giveway, speed_extremis, d_att_floor, r_cq, d_cq, dpsi_cq : float, optional
+    speed_cut, speed_giveway, speed_extremis, d_att_floor, r_cq, d_cq, dpsi_cq, dpsi_free : float, optional
         Ignored here (see above).
     code : array_like, optional
         Each neighbour's remembered encounter code (1×M, :mod:`mmg_casadi.guidance.colregs_encounters`: role, plus
@@ -323,7 +337,9 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     v_rel = nb_vel - ca.repmat(own_vel, 1, m)
     tcpa, p_cpa = _cpa(los, v_rel)
     dcpa = ca.sqrt(ca.sum1(p_cpa * p_cpa))
-    past = tcpa <= 0
+    # past: the range opens, or closes more slowly than v_ship_min (on parallel courses at nearly equal speeds the
+    # CPA never comes, and a ship held as stand-on would sail alongside for ever)
+    past = -ca.sum1(los * v_rel) / ca.fmax(d, R_MIN) < v_ship_min
     risk = ship * (1 - past) * (dcpa < d_risk)
     role_now = classify_role(beta, alpha, own_psi, chi_nb, own_speed, speed_nb, theta_head_on=theta_head_on,
                              stern=gamma_max)
@@ -396,7 +412,7 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
            gamma_max, theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear, v_ship_min,
            r_guard, lam_guard, d_att_floor, speed_cut, speed_giveway, speed_extremis, r_cq, d_cq, dpsi_cq,
            n_candidates, code, course, base,
-           d_risk=PARAMETERS["cv_d_risk"].default, walls=None, clearance=None, horizon=None):
+           d_risk=PARAMETERS["cv_d_risk"].default, dpsi_free=math.pi, walls=None, clearance=None, horizon=None):
     """Desired-heading vector, speed factor and terms of :func:`colregs_vortex` (``terms`` None without neighbours);
     ``walls``, ``clearance``, ``horizon``: the land test of the stand-on action and the close-quarters filter."""
     own_pos, own_vel, goal = _col2(own_pos), _col2(own_vel), _col2(goal)
@@ -463,6 +479,13 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
     # close quarters: keep the field's heading unless it leads into the cone of something within r_cq
     close = active * (t["d"] < r_cq)
     psi_f = ca.atan2(out[1], out[0])
+    if not (isinstance(dpsi_free, (int, float)) and dpsi_free >= math.pi):
+        # nothing avoided and nothing within close quarters (where the filter below needs its whole reach): a
+        # moderate turn, at most dpsi_free from the present heading
+        free = (ca.sum2(active * t["avoid"]) == 0) * (ca.sum2(close) == 0)
+        turn = ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_free), dpsi_free)
+        psi_f = ca.if_else(free, own_psi + turn, psi_f)
+        out = ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_f), ca.sin(psi_f))
     # the heading the ship turns through next: at most dpsi_cq from its own on the way to the field's
     psi_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_cq), dpsi_cq)
     speed = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
@@ -498,8 +521,8 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
                    speed_extremis=PARAMETERS["cv_speed_extremis"].default,
                    r_cq=0.0, d_cq=PARAMETERS["cv_d_cq"].default,
                    dpsi_cq=PARAMETERS["cv_dpsi_cq_deg"].default * math.pi / 180.0,
-                   n_candidates=PARAMETERS["vo_candidates"].default, code=None, course=None, base=None, walls=None,
-                   clearance=None, horizon=None):
+                   dpsi_free=math.pi, n_candidates=PARAMETERS["vo_candidates"].default, code=None, course=None,
+                   base=None, walls=None, clearance=None, horizon=None):
     """Desired-heading vector of ``colregs-vortex`` (2×1; its direction is the desired heading).
 
     Sink at the goal (strength capped while avoiding), the modified vortex at every ship the own ship gives way to,
@@ -555,6 +578,9 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
     dpsi_cq : float
         The filter judges the heading the ship turns through next, at most this far from its own on the way to
         the field's (rad, (0, π]).
+    dpsi_free : float
+        While nothing is avoided, the heading is at most this far from the present one (rad, (0, π]; π, the
+        default here: no limit).
     n_candidates : int
         Candidate headings of the filter's velocity obstacle (evenly spread; the closed loop passes the layout's
         ``vo_candidates``).
@@ -596,8 +622,9 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
                   t_act=t_act, r_act=r_act, t_close=t_close, k_standon=k_standon, dpsi_min=dpsi_min, d_clear=d_clear,
                   v_ship_min=v_ship_min, r_guard=r_guard, lam_guard=lam_guard, d_att_floor=d_att_floor,
                   d_risk=d_risk, speed_cut=speed_cut, speed_giveway=speed_giveway,
-                  speed_extremis=speed_extremis, r_cq=r_cq, d_cq=d_cq, dpsi_cq=dpsi_cq, n_candidates=n_candidates, code=code,
-                  course=course, base=base, walls=walls, clearance=clearance, horizon=horizon)[0]
+                  speed_extremis=speed_extremis, r_cq=r_cq, d_cq=d_cq, dpsi_cq=dpsi_cq, dpsi_free=dpsi_free,
+                  n_candidates=n_candidates, code=code, course=course, base=base, walls=walls, clearance=clearance,
+                  horizon=horizon)[0]
 
 
 def colregs_vortex_command(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, memory, **kw):

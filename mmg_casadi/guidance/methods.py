@@ -130,7 +130,9 @@ class Method:
         so adding a method leaves every other compiled closed loop unchanged.
     goal_capture : bool
         A ship that passed its final waypoint outside the acceptance radius turns back to it (the paper's ILOS
-        follows the extended last leg for ever; kept for the paper's methods).
+        follows the extended last leg for ever; kept for the paper's methods), and an earlier waypoint she passed
+        abeam outside it counts as passed (the paper switches only within the radius, so a ship that avoided
+        something near a waypoint turns back to it).
     memory : tuple of str
         Names of the method's memory rows (state rows of each ship, rad; see :class:`Command`).
     commands_speed : bool
