@@ -227,8 +227,8 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     if spec.goal_capture:
         # past its final waypoint (missed outside the acceptance radius) the ship turns back to it instead of
         # following the extended last leg for ever
-        past = ca.logic_and(Xi[S_["idx"]] > Pi["n_path"] - 1.5,
-                            terms["x_e"] > ca.norm_2(terms["wp_next"] - terms["wp_prev"]))
+        beyond = terms["x_e"] > ca.norm_2(terms["wp_next"] - terms["wp_prev"])  # abeam of the waypoint or past it
+        past = ca.logic_and(Xi[S_["idx"]] > Pi["n_path"] - 1.5, beyond)
         to_goal = terms["wp_next"] - pos[i]
         psi_ilos = ca.if_else(past, ca.atan2(to_goal[1], to_goal[0]), psi_ilos)
     if layout.disturbed:  # optional crab-angle compensation: steer the course, psi_d = chi_d - beta
@@ -287,8 +287,7 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     if spec.goal_capture:
         # a waypoint before the final one that the ship passed abeam outside the acceptance radius (avoiding
         # something) counts as passed: she does not turn back to it
-        abeam = ca.logic_and(Xi[S_["idx"]] < Pi["n_path"] - 1.5,
-                             terms["x_e"] > ca.norm_2(terms["wp_next"] - terms["wp_prev"]))
+        abeam = ca.logic_and(Xi[S_["idx"]] < Pi["n_path"] - 1.5, beyond)
         idx_next = ca.if_else(ca.logic_and(abeam, idx_next < Xi[S_["idx"]] + 0.5), Xi[S_["idx"]] + 1, idx_next)
     t_next = t + dt
 

@@ -339,7 +339,7 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     dcpa = ca.sqrt(ca.sum1(p_cpa * p_cpa))
     # past: the range opens, or closes more slowly than v_ship_min (on parallel courses at nearly equal speeds the
     # CPA never comes, and a ship held as stand-on would sail alongside for ever)
-    past = -ca.sum1(los * v_rel) / ca.fmax(d, R_MIN) < v_ship_min
+    past = -mv["v_r"] < v_ship_min  # v_r: the range rate
     risk = ship * (1 - past) * (dcpa < d_risk)
     role_now = classify_role(beta, alpha, own_psi, chi_nb, own_speed, speed_nb, theta_head_on=theta_head_on,
                              stern=gamma_max)
