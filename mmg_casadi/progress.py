@@ -1,4 +1,5 @@
-"""Progress bars of long work on stderr (tqdm): redrawn in place on a terminal, a line every 30 s in logs.
+"""Progress of long work on stderr: bars (tqdm), redrawn in place on a terminal, a line every 30 s in logs, and
+status lines (:func:`say`).
 
 Examples
 --------
@@ -42,3 +43,23 @@ def progress_bar(total: int, *, desc: str = "", initial: int = 0, unit: str = "r
     tty = hasattr(file, "isatty") and file.isatty()
     return tqdm(total=total, desc=desc, initial=initial, unit=unit, file=file, dynamic_ncols=tty,
                 mininterval=0.5 if tty else 30.0, smoothing=0.1)
+
+
+def say(msg: str) -> None:
+    """Print a status line of long work on stderr, flushed at once (a log shows it before the work that follows).
+
+    Parameters
+    ----------
+    msg : str
+        The line.
+
+    Examples
+    --------
+    >>> import contextlib, io
+    >>> err = io.StringIO()
+    >>> with contextlib.redirect_stderr(err):
+    ...     say("[1/2] design")
+    >>> err.getvalue()
+    '[1/2] design\\n'
+    """
+    print(msg, file=sys.stderr, flush=True)

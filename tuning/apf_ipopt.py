@@ -57,7 +57,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -72,6 +71,7 @@ from mmg_casadi.errors import InputError, check_range
 from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.montecarlo.results import wilson_interval
 from mmg_casadi.params import PARAMETERS
+from mmg_casadi.progress import say
 from mmg_casadi.scenarios.run import build_problem, run_scenario
 
 from .apf import HOLDOUT_SEED, sampled_scenario
@@ -552,10 +552,6 @@ class _Progress(ca.Callback):
         return [0]
 
 
-def _stderr(msg: str) -> None:
-    print(msg, file=sys.stderr, flush=True)
-
-
 def prepare_cases(scenarios: dict, config: TuningConfig = TuningConfig(), report=None) -> list[TrainingCase]:
     """:func:`prepare_case` for every scenario, optionally reporting each case's size and horizon.
 
@@ -584,7 +580,7 @@ def prepare_cases(scenarios: dict, config: TuningConfig = TuningConfig(), report
     return out
 
 
-def tune(scenarios, config: TuningConfig = TuningConfig(), *, theta0=PAPER, report=_stderr,
+def tune(scenarios, config: TuningConfig = TuningConfig(), *, theta0=PAPER, report=say,
          check_gradient: bool = True) -> TuningResult:
     """Tune θ = (k_vor0, lam_sink, r_safe) on ``scenarios`` (a dict name -> Scenario, or prepared
     :class:`TrainingCase` list) with IPOPT; ``report`` (a callable taking a line, or None) gets the progress.
@@ -708,7 +704,7 @@ def write_params_toml(result: TuningResult | dict, path) -> None:
 
 
 def evaluate(param_sets: dict, *, envs=(1, 2, 3, 4, 5), runs: int = 40, base_seed: int = HOLDOUT_SEED,
-             report=_stderr) -> dict:
+             report=say) -> dict:
     """Exact closed loop on the held-out scenarios: for every environment, ``runs`` scenarios drawn with
     ``base_seed`` and every parameter set of ``param_sets`` (name -> {k_vor0, lam_sink, r_safe}) in one batch
     (:func:`mmg_casadi.closed_loop.simulation.simulate_batch`). Returns ``{env: {name: summary}}`` with success rate and

@@ -23,7 +23,6 @@ the disk cache; 2 × 2000 held-out runs in each of the five environments, 21 min
 from __future__ import annotations
 
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -33,6 +32,7 @@ from mmg_casadi.montecarlo.results import ResultsTable
 from mmg_casadi.limits import MAX_RUNS, check_runs
 from mmg_casadi.montecarlo.study import check_resumable, check_study_args, run_study
 from mmg_casadi.params import PARAMETERS, resolve
+from mmg_casadi.progress import say
 from mmg_casadi.scenarios.scenario import with_params
 
 from . import apf, judge, safety, search
@@ -40,10 +40,6 @@ from . import apf, judge, safety, search
 METHOD = "modified-vortex"
 TRAIN_ENVS = (3, 4, 5)
 """Environments the sampled training scenarios come from."""
-
-
-def _say(msg: str) -> None:
-    print(msg, file=sys.stderr, flush=True)
 
 
 def _count(name: str, value, low: int) -> int:
@@ -119,7 +115,7 @@ def heldout(out, sets: dict, *, runs: int, envs, base_seed: int, workers=None) -
     res = {}
     for name, params in sets.items():
         d = Path(out) / name
-        _say(f"  held-out study '{name}' -> {d}")
+        say(f"  held-out study '{name}' -> {d}")
         run_study(d, runs=runs, envs=envs, methods=(METHOD,), base_seed=base_seed, params=params, workers=workers)
         rows = [r for r in ResultsTable(d / "runs.csv").read() if r["run"] < runs and r["environment"] in envs]
         res[name] = judge.outcomes_from_rows(rows, METHOD)
@@ -242,36 +238,36 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
     timings = {}
     t_start = time.perf_counter()
 
-    _say(f"[1/4] training set: 5 paper encounters + {train} sampled scenarios (environments "
+    say(f"[1/4] training set: 5 paper encounters + {train} sampled scenarios (environments "
          f"{','.join(map(str, TRAIN_ENVS))}, seed {apf.TRAIN_SEED})")
     t0 = time.perf_counter()
     scenarios = {k: with_params(v, extra) for k, v in training_set(train).items()}
     cases = [safety.prepare_case(k, sc, config) for k, sc in scenarios.items()]
     timings["prepare_s"] = time.perf_counter() - t0
     n_fail = sum(not c.exact_success for c in cases)
-    _say(f"  {len(cases)} cases prepared in {timings['prepare_s']:.0f} s; at the paper's values the own ship "
+    say(f"  {len(cases)} cases prepared in {timings['prepare_s']:.0f} s; at the paper's values the own ship "
          f"fails in {n_fail} (exact loop)")
     objective = safety.SafetyObjective(cases, config)
-    _say("[2/4] augmented steps (compiled once per layout, cached) and gradient check")
-    timings["compile_s"] = objective.compile(_say)
+    say("[2/4] augmented steps (compiled once per layout, cached) and gradient check")
+    timings["compile_s"] = objective.compile(say)
     paper_idx = list(range(min(5, len(cases))))
     t0 = time.perf_counter()
     gc = safety.gradient_check(objective, safety.PAPER, subset=paper_idx)
     timings["gradient_check_s"] = time.perf_counter() - t0
-    _say(f"  gradient check on the paper encounters: AD {gc['ad']} FD {gc['fd']} relative error "
+    say(f"  gradient check on the paper encounters: AD {gc['ad']} FD {gc['fd']} relative error "
          f"{gc['rel_error_norm']:.2e}")
 
-    _say(f"[3/4] search: paper + {grid}x{grid} grid, then L-BFGS-B from the best {starts} (<= {max_iter} "
+    say(f"[3/4] search: paper + {grid}x{grid} grid, then L-BFGS-B from the best {starts} (<= {max_iter} "
          "iterations each)")
     t0 = time.perf_counter()
-    found = search.search(objective, out, grid_n=grid, starts=starts, max_iter=max_iter, report=_say)
+    found = search.search(objective, out, grid_n=grid, starts=starts, max_iter=max_iter, report=say)
     timings["search_s"] = time.perf_counter() - t0
     best = dict(zip(safety.THETA, found["best"]["theta"]))
     tuned = {"k_vor0": best["k_vor0"], "lam_sink": safety.LAM_SINK, "r_safe": best["r_safe"]}
-    _say(f"  best: {tuned} objective {found['best']['objective']:.6f} (paper {found['paper']['objective']:.6f})")
+    say(f"  best: {tuned} objective {found['best']['objective']:.6f} (paper {found['paper']['objective']:.6f})")
     write_params(out / "params.toml", tuned, verdict="not judged", summary="held-out study not finished")
 
-    _say(f"[4/4] held-out statistics study: {holdout} runs per environment {list(envs)}, seed "
+    say(f"[4/4] held-out statistics study: {holdout} runs per environment {list(envs)}, seed "
          f"{apf.HOLDOUT_SEED}, paper vs tuned (paired)")
     t0 = time.perf_counter()
     same = all(abs(tuned[k] - paper[k]) < 1e-12 for k in paper)
@@ -302,6 +298,6 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
     }
     write_json(out / "report.json", report)
     (out / "report.md").write_text(_markdown(report), encoding="utf-8")
-    _say(_markdown(report))
-    _say(f"wrote {out / 'params.toml'}, {out / 'report.json'}, {out / 'report.md'} ({timings['total_s']:.0f} s)")
+    say(_markdown(report))
+    say(f"wrote {out / 'params.toml'}, {out / 'report.json'}, {out / 'report.md'} ({timings['total_s']:.0f} s)")
     return report

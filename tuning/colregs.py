@@ -34,7 +34,6 @@ Examples
 from __future__ import annotations
 
 import csv
-import sys
 import time
 from pathlib import Path
 
@@ -49,6 +48,7 @@ from mmg_casadi.montecarlo.results import ResultsTable
 from mmg_casadi.montecarlo.stats import paired_comparison, wilson
 from mmg_casadi.montecarlo.study import check_resumable, check_study_args, run_study
 from mmg_casadi.params import PARAMETERS
+from mmg_casadi.progress import say
 
 from .cli_apf import check_settings
 from .judge import write_params as judge_params
@@ -72,10 +72,6 @@ The box spans about half to twice each default."""
 FAILURE_WEIGHT = 10.0
 """Default weight of the failure rate in :func:`objective`: a success rate one percentage point lower costs as much
 as ten percentage points of compliance (one run lost in a thousand, as one point of compliance)."""
-
-
-def _say(msg: str) -> None:
-    print(msg, file=sys.stderr, flush=True)
 
 
 def objective(rows, *, failure_weight: float = FAILURE_WEIGHT) -> dict:
@@ -351,19 +347,19 @@ def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16,
     write_json(out / "tuning.json", settings)
     t_start = time.perf_counter()
 
-    _say(f"[1/2] design: {len(sets)} candidates x {design} runs of environments {list(envs)} ({METHOD}, seed "
+    say(f"[1/2] design: {len(sets)} candidates x {design} runs of environments {list(envs)} ({METHOD}, seed "
          f"{seed}), then {refine} coordinate sweep(s) around the best")
     table = []
 
     def evaluate(cand: dict) -> None:
         i = len(table)
         d = out / "candidates" / f"c{i:02d}"
-        _say(f"  candidate {i}: {cand}")
+        say(f"  candidate {i}: {cand}")
         run_study(d, runs=design, envs=envs, methods=(METHOD,), base_seed=seed, params={**fixed, **cand},
                   workers=workers)
         score = objective(_rows(d, envs, 0, design), failure_weight=failure_weight)
         table.append({"candidate": i, **cand, **score})
-        _say(f"    success {score['success']:.4f}, compliance {score['compliance']:.4f} (stand-on "
+        say(f"    success {score['success']:.4f}, compliance {score['compliance']:.4f} (stand-on "
              f"{score['stand_on']:.4f}), objective {score['objective']:.4f}")
 
     for cand in sets:
@@ -382,7 +378,7 @@ def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16,
     judgement, summary = None, "the search kept the defaults"
     if best["candidate"]:
         write_params(out / "params.toml", best_params, verdict="not judged", summary="held-out runs not finished")
-        _say(f"[2/2] held out: runs {design}-{design + holdout - 1}, defaults vs candidate {best['candidate']}")
+        say(f"[2/2] held out: runs {design}-{design + holdout - 1}, defaults vs candidate {best['candidate']}")
         rows = {}
         for i in (0, best["candidate"]):
             d = out / "candidates" / f"c{i:02d}"
@@ -406,5 +402,5 @@ def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16,
                         "report": str(out / "report.json")}}
     write_json(out / "report.json", report)
     (out / "report.md").write_text(_markdown(report), encoding="utf-8")
-    _say(_markdown(report))
+    say(_markdown(report))
     return report
