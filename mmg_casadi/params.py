@@ -255,7 +255,8 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "duty or of the stand-on action (Rule 8, readily apparent)", "NTNU evaluator's Δχ_app (Hagen et al. 2023 configuration)",
        "colregs-vortex"),
     _P("cv_d_risk", 4.0, 0.0, None, "L", "risk of collision (Rule 7), the onset of an encounter: a ship within R_safe "
-       "whose straight-line passing distance at the present velocities is below this while the range closes",
+       "whose straight-line passing distance at the present velocities is below this while the range closes; a "
+       "head-on or crossing give-way ship alters at least until her straight line passes at this (Rule 16)",
        "our choice: twice the paper's 2 L collision distance (§Statistical Analysis), a passing with less than one "
        "collision distance of clearance, as the iitm-lab scoring profile's gate", "colregs-vortex", low_open=True),
     _P("cv_d_clear", 6.0, 0.0, None, "L", "a give-way ship holds its alteration until the planned-course passing "

@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from mmg_casadi.closed_loop.layout import default_globals
-from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams, colregs_vortex, colregs_vortex_terms
+from mmg_casadi.guidance.colregs_encounters import GIVE_WAY
+from mmg_casadi.guidance.colregs_vortex import (FLOOR_STEP, ColregsVortexParams, colregs_vortex,
+                                               colregs_vortex_terms)
 from mmg_casadi.errors import ParameterError
 from mmg_casadi.guidance.fields import heading_of, modified_vortex
 from mmg_casadi.scenarios.scenario import load_scenario, scenario_from_dict, with_method
@@ -115,6 +117,28 @@ def test_head_on_give_way_alteration_is_to_starboard_and_readily_apparent(rng):
     h = heading(FAR_GOAL, [rng, 0.0], [-1.0, 0.0])
     assert h >= math.degrees(CV.dpsi_min) - 1e-9
     assert h >= heading(FAR_GOAL, [rng, 0.0], [-1.0, 0.0], method="modified") - 1e-9
+
+
+def test_give_way_alteration_is_substantial_rule_16():
+    # environment 5, run 51 (seed 0), ship 7 at t = 46: she gives way to a ship 13.7 L nearly abeam to
+    # starboard; Rule 8's 30° minimum from her heading at the onset (1°) passes 1.0 L from her, the field asks for
+    # no more, and the stand-on ship's close-quarters filter then has to act at 8 L. The alteration is the
+    # smallest in FLOOR_STEP steps whose straight line passes at d_risk or more
+    pos, vel, speed, base = np.array([-1.0, 13.7]), np.array([0.8, -0.6]), 0.76, math.radians(1.0)
+
+    def passing(deg):
+        own = speed * np.array([math.cos(math.radians(deg)), math.sin(math.radians(deg))])
+        rel = vel - own
+        return float(np.linalg.norm(pos + rel * max(0.0, -(pos @ rel) / (rel @ rel))))
+
+    ps = math.radians(15.0)
+    v = colregs_vortex([0.0, 0.0], ps, [speed * math.cos(ps), speed * math.sin(ps)], [60.0, 0.0], ca.DM(pos),
+                       ca.DM(vel), [1.0], code=[GIVE_WAY], course=0.0, base=base, **KW)
+    h = math.degrees(float(heading_of(v)))
+    minimum = math.degrees(base + CV.dpsi_min)
+    assert passing(minimum) < 1.1
+    assert h == pytest.approx(minimum + 4 * math.degrees(FLOOR_STEP), abs=1e-6)
+    assert passing(h) >= CV.d_risk > passing(h - math.degrees(FLOOR_STEP))
 
 
 def test_near_the_goal_avoidance_wins_over_the_goal():

@@ -38,8 +38,12 @@ The own ship's *planned course* is the bearing of its next waypoint at its curre
 - **Rule 8**: while a give-way duty is open or the ship acts alone, the heading from the ship terms differs by at
   least ``dpsi_min`` to starboard from the heading at the onset of the duty or of the action (``cv_base``; the goal
   bearing without memory) — always to starboard for head-on and crossing duties (Rules 14, 15), otherwise unless
-  the field already turns further to port (an overtaking ship may pass on either side). Static obstacles and the
-  guard below are added after this step, so they keep their full say.
+  the field already turns further to port (an overtaking ship may pass on either side). For a head-on or
+  crossing duty the alteration is also substantial (Rule 16): at least the smallest one to starboard, in
+  ``FLOOR_STEP`` steps from ``dpsi_min`` up to 90°, whose straight-line passing distance to every ship of such a
+  duty is ``d_risk`` or more, so that the give-way ship's action alone removes the risk of collision
+  (:func:`giveway_floor`). Static obstacles and the guard below are added after this step, so they keep their
+  full say.
 - **Speed** (Rule 8(e)): besides the stand-on ship's cut (``speed_cut``), a give-way ship whose alteration alone
   still leads into close quarters (the escalation above) can slacken speed (``speed_giveway``), and any ship in
   extremis, when no heading the close-quarters filter below may turn through avoids the cones at her present
@@ -97,6 +101,8 @@ from mmg_casadi.guidance.ilos import wrap_angle
 from mmg_casadi.guidance.velocity_obstacle import heading_feasible, velocity_obstacle
 
 _BIG = 1.0e6
+FLOOR_STEP = math.radians(10.0)
+"""Step of the candidate alterations of :func:`giveway_floor` (rad): the 10° steps of a helm order's course."""
 
 
 @dataclass(frozen=True)
@@ -245,6 +251,76 @@ def _crosses_ahead(los, nb_vel, v_own):
     t_x = -side / ca.if_else(ca.fabs(rate) > 1e-9, rate, 1e-9)
     along = ca.sum1(h * rel) + t_x * (ca.sum1(h * v) - speed_nb)
     return (t_x > 0) * (along > 0) * (ca.fabs(rate) > 1e-9)
+
+
+def giveway_floor(own_pos, speed, ref, nb_pos, nb_vel, duty, *, dpsi_min, d_risk):
+    """Smallest alteration to starboard of ``ref``, from ``dpsi_min`` in :data:`FLOOR_STEP` steps up to 90°, whose
+    straight-line passing distance (own ship at ``speed``, neighbours at ``nb_vel``) to every neighbour with
+    ``duty`` 1 is at least ``d_risk`` (a neighbour already past its CPA counts as clear); if none is, the
+    candidate whose passing distance is the widest (Rule 16: the give-way ship's action alone removes the risk of
+    collision, or comes as near to it as a course change can).
+
+    Parameters
+    ----------
+    own_pos : array_like
+        Own position (2×1, L).
+    speed : float or casadi.SX
+        Own speed (L/unit time).
+    ref : float or casadi.SX
+        Heading the alteration is measured from (rad): the heading at the onset of the duty.
+    nb_pos, nb_vel : array_like
+        Neighbour positions and velocities (2×M, L and L/unit time).
+    duty : array_like
+        1×M, 1 for the neighbours the floor is judged against (head-on and crossing give-way duties).
+    dpsi_min : float or casadi.SX
+        The smallest alteration (rad, Rule 8's readily apparent one).
+    d_risk : float or casadi.SX
+        Passing distance that ends the risk of collision (L).
+
+    Returns
+    -------
+    casadi.DM or casadi.SX
+        The alteration (rad, to starboard of ``ref``).
+
+    Examples
+    --------
+    A ship 12 L ahead and 12 L to starboard crossing to port at the own speed, both heading for the same point:
+    altering 30° passes 4.4 L from her, 40° 5.8 L, 50° 7.2 L; with a 6 L passing distance the floor is 50°, and
+    with no duty it is the minimum itself. At 0.7 times the speed of a ship 2 L ahead and 12 L to starboard, no
+    alteration up to 90° passes at 4 L; 30° passes widest (3.1 L; 70° 0.3 L, 90° 2.0 L).
+
+    >>> import math, casadi as ca
+    >>> kw = dict(dpsi_min=math.radians(30), d_risk=6.0)
+    >>> pos, vel = ca.DM([[12], [12]]), ca.DM([[0], [-1]])
+    >>> round(math.degrees(float(giveway_floor([0, 0], 1.0, 0.0, pos, vel, [1], **kw))))
+    50
+    >>> round(math.degrees(float(giveway_floor([0, 0], 1.0, 0.0, pos, vel, [0], **kw))))
+    30
+    >>> kw["d_risk"] = 4.0
+    >>> round(math.degrees(float(giveway_floor([0, 0], 0.7, 0.0, ca.DM([[2], [12]]), vel, [1], **kw))))
+    30
+    """
+    own_pos = _col2(own_pos)
+    nb_pos, nb_vel = _matrix(nb_pos, 2), _matrix(nb_vel, 2)
+    m = nb_pos.size2()
+    duty = _row(duty, m)
+    los = nb_pos - ca.repmat(own_pos, 1, m)
+    steps = math.ceil((math.pi / 2) / FLOOR_STEP)  # enough steps to reach 90° from any dpsi_min >= 0
+    alterations, passing = [], []
+    for k in range(steps + 1):
+        dk = ca.fmin(dpsi_min + k * FLOOR_STEP, math.pi / 2)
+        v_k = speed * ca.vertcat(ca.cos(ref + dk), ca.sin(ref + dk))
+        tcpa, p_cpa = _cpa(los, nb_vel - ca.repmat(v_k, 1, m))
+        clear = (1 - duty) + duty * (tcpa <= 0)  # not judged, or already past the CPA
+        alterations.append(dk)
+        passing.append(ca.mmin(clear * _BIG + (1 - clear) * ca.sqrt(ca.sum1(p_cpa * p_cpa))))
+    # none passes at d_risk: the one that passes widest (the first of equals)
+    floor, widest = alterations[0], passing[0]
+    for dk, pk in zip(alterations[1:], passing[1:]):
+        floor, widest = ca.if_else(pk > widest, dk, floor), ca.fmax(pk, widest)
+    for dk, pk in zip(reversed(alterations), reversed(passing)):
+        floor = ca.if_else(pk >= d_risk, dk, floor)
+    return floor
 
 
 def _is(code, role):
@@ -463,8 +539,12 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
     delta = wrap_angle(own_psi - ref) + wrap_angle(ca.atan2(ships[1], ships[0]) - own_psi)
     # head-on and crossing give-way ships alter to starboard only (Rules 14, 15); otherwise starboard unless the
     # field turns to port by more than the minimum itself (several neighbours, an overtaker on the starboard side)
-    starboard_only = ca.sum2(active * t["duty"] * (t["head_on"] + t["crossing"])) > 0
-    delta_min = ca.if_else(ca.logic_or(starboard_only, delta > -dpsi_min), ca.fmax(delta, dpsi_min), delta)
+    starboard = active * t["duty"] * (t["head_on"] + t["crossing"])
+    starboard_only = ca.sum2(starboard) > 0
+    # ... and substantially (Rule 16): at least the alteration whose straight line alone ends the risk of collision
+    floor = giveway_floor(own_pos, speed_now, ref, nb_pos, nb_vel, starboard, dpsi_min=dpsi_min, d_risk=d_risk)
+    delta_min = ca.if_else(starboard_only, ca.fmax(delta, floor),
+                           ca.if_else(delta > -dpsi_min, ca.fmax(delta, dpsi_min), delta))
     psi_s = ref + ca.if_else(apparent, delta_min, delta)
     ships = ca.if_else(ca.logic_or(apparent, hold), ca.sqrt(ca.sumsqr(ships)) * ca.vertcat(ca.cos(psi_s), ca.sin(psi_s)),
                        ships)
