@@ -239,14 +239,14 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
     t_start = time.perf_counter()
 
     say(f"[1/4] training set: 5 paper encounters + {train} sampled scenarios (environments "
-         f"{','.join(map(str, TRAIN_ENVS))}, seed {apf.TRAIN_SEED})")
+        f"{','.join(map(str, TRAIN_ENVS))}, seed {apf.TRAIN_SEED})")
     t0 = time.perf_counter()
     scenarios = {k: with_params(v, extra) for k, v in training_set(train).items()}
     cases = [safety.prepare_case(k, sc, config) for k, sc in scenarios.items()]
     timings["prepare_s"] = time.perf_counter() - t0
     n_fail = sum(not c.exact_success for c in cases)
     say(f"  {len(cases)} cases prepared in {timings['prepare_s']:.0f} s; at the paper's values the own ship "
-         f"fails in {n_fail} (exact loop)")
+        f"fails in {n_fail} (exact loop)")
     objective = safety.SafetyObjective(cases, config)
     say("[2/4] augmented steps (compiled once per layout, cached) and gradient check")
     timings["compile_s"] = objective.compile(say)
@@ -255,10 +255,10 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
     gc = safety.gradient_check(objective, safety.PAPER, subset=paper_idx)
     timings["gradient_check_s"] = time.perf_counter() - t0
     say(f"  gradient check on the paper encounters: AD {gc['ad']} FD {gc['fd']} relative error "
-         f"{gc['rel_error_norm']:.2e}")
+        f"{gc['rel_error_norm']:.2e}")
 
     say(f"[3/4] search: paper + {grid}x{grid} grid, then L-BFGS-B from the best {starts} (<= {max_iter} "
-         "iterations each)")
+        "iterations each)")
     t0 = time.perf_counter()
     found = search.search(objective, out, grid_n=grid, starts=starts, max_iter=max_iter, report=say)
     timings["search_s"] = time.perf_counter() - t0
@@ -268,7 +268,7 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
     write_params(out / "params.toml", tuned, verdict="not judged", summary="held-out study not finished")
 
     say(f"[4/4] held-out statistics study: {holdout} runs per environment {list(envs)}, seed "
-         f"{apf.HOLDOUT_SEED}, paper vs tuned (paired)")
+        f"{apf.HOLDOUT_SEED}, paper vs tuned (paired)")
     t0 = time.perf_counter()
     same = all(abs(tuned[k] - paper[k]) < 1e-12 for k in paper)
     sets = {"paper": {**extra, **paper}} if same else {"paper": {**extra, **paper}, "tuned": {**extra, **tuned}}

@@ -348,7 +348,7 @@ def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16,
     t_start = time.perf_counter()
 
     say(f"[1/2] design: {len(sets)} candidates x {design} runs of environments {list(envs)} ({METHOD}, seed "
-         f"{seed}), then {refine} coordinate sweep(s) around the best")
+        f"{seed}), then {refine} coordinate sweep(s) around the best")
     table = []
 
     def evaluate(cand: dict) -> None:
@@ -360,7 +360,7 @@ def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16,
         score = objective(_rows(d, envs, 0, design), failure_weight=failure_weight)
         table.append({"candidate": i, **cand, **score})
         say(f"    success {score['success']:.4f}, compliance {score['compliance']:.4f} (stand-on "
-             f"{score['stand_on']:.4f}), objective {score['objective']:.4f}")
+            f"{score['stand_on']:.4f}), objective {score['objective']:.4f}")
 
     for cand in sets:
         evaluate(cand)

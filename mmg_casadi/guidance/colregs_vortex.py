@@ -102,7 +102,7 @@ from mmg_casadi.guidance.velocity_obstacle import heading_feasible, velocity_obs
 
 _BIG = 1.0e6
 FLOOR_STEP = math.radians(10.0)
-"""Step of the candidate alterations of :func:`giveway_floor` (rad): the 10° steps of a helm order's course."""
+"""Step between the candidate alterations of :func:`giveway_floor` (rad, 10°)."""
 
 
 @dataclass(frozen=True)
