@@ -7,7 +7,9 @@ import pytest
 from matplotlib.figure import Figure
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.scenarios.imazu import CASES, imazu_case, plot_imazu, run_imazu
+from mmg_casadi.colregs.profiles import iitm_lab
+from mmg_casadi.scenarios.imazu import CASES, imazu_case, plot_imazu, run_imazu, stand_on_bound
+from mmg_casadi.vessel.maneuvers import last_moment_manoeuvre, turning_circle
 from mmg_casadi.scenarios.scenario import scenario_from_dict
 
 # Imazu's problems as encoded in MarWaltz/TUD_RL tud_rl/envs/_envs/Imazu.py (after Sawada et al. 2021):
@@ -116,3 +118,37 @@ def test_every_target_on_a_collision_course_yields_a_scored_encounter():
         assert others == [f"target{i}" for i in range(1, N_TARGETS[r["case"]] + 1)], (r["case"], others)
     roles = {r["case"]: [e["role"] for e in r["encounters"]] for r in rows if r["case"] <= 4}
     assert roles == {1: ["head-on"], 2: ["give-way"], 3: ["overtaking"], 4: ["stand-on"]}
+
+
+def test_stand_on_bound_turns_at_the_earliest_lawful_time_and_finds_the_widest_passing():
+    (row,) = stand_on_bound(4)  # one ship crossing from 45° on the port bow at the own speed
+    assert row["role"] == "stand-on" and row["t_late"] == 36.0  # TCPA 4 of the iitm-lab profile
+    assert row["range_late"] == pytest.approx(4 * math.hypot(math.cos(math.pi / 4) - 1, math.sin(math.pi / 4)))
+    turn = turning_circle(35.0, t_end=10.0)
+    t_tol = turn.t[np.argmax(np.degrees(turn.state("psi")) >= iitm_lab().course_tolerance_deg)]
+    assert row["t_turn"] == pytest.approx(36.0 - t_tol) and row["side"] == "starboard"
+    ship = targets(4)[0]
+    h = math.radians(ship["heading"])
+    again = last_moment_manoeuvre(ship["start"], (math.cos(h), math.sin(h)), row["t_turn"], t_end=60.0)
+    assert again.metrics["min_distance"] == pytest.approx(row["passing"])
+    later = last_moment_manoeuvre(ship["start"], (math.cos(h), math.sin(h)), row["t_turn"] + 1.0, t_end=60.0)
+    assert later.metrics["min_distance"] < row["passing"]
+    assert row["safe"] is (row["passing"] >= 2.0) and 2.0 < row["passing"] < 3.0
+
+
+def test_stand_on_bound_a_slowly_closing_crosser_is_within_a_ship_length_when_her_inaction_is_apparent():
+    rows = stand_on_bound(10)
+    assert [r["role"] for r in rows] == ["give-way", "stand-on"]
+    slow = rows[1]
+    assert slow["range_late"] < 1.1 and slow["passing"] < 2.0 and not slow["safe"]
+    # the ntnu-2023 profile lets her act from stage 3 (22 L with 50 m per length): then she can pass wide
+    (_, early) = stand_on_bound(10, profile="ntnu-2023", step=2.0)
+    assert early["t_late"] == 0.0 and early["safe"] and early["passing"] > 4.0
+
+
+@pytest.mark.parametrize("kw, field", [(dict(k=23), "case"), (dict(k=4, step=0.0), "step"),
+                                       (dict(k=4, profile="lab"), "profile")])
+def test_stand_on_bound_refuses_bad_input(kw, field):
+    k = kw.pop("k")
+    with pytest.raises(InputError, match=field):
+        stand_on_bound(k, **kw)

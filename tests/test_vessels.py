@@ -19,7 +19,7 @@ import pytest
 
 from mmg_casadi.errors import InputError, ParameterError
 from mmg_casadi.vessel.library import VESSELS, data_path, load_vessel, vessel_table
-from mmg_casadi.vessel.maneuvers import turning_circle, zigzag
+from mmg_casadi.vessel.maneuvers import last_moment_manoeuvre, turning_circle, zigzag
 from mmg_casadi.vessel.mmg import build_mmg, linearise, propeller_rpm_for_speed
 from mmg_casadi.vessel.ship import required_coefficients
 
@@ -290,3 +290,38 @@ def test_mixed_traffic_targets_take_the_hulls_in_turn_and_sail_at_their_own_spee
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "error: --vessels: expected one of: own, kcs, kvlcc2, kcs,kvlcc2" in err[0]
     assert not (tmp_path / "bad").exists()
+
+
+# a ship crossing from 45° on the port bow at the own speed; both reach (40, 0) at t = 40 without manoeuvres
+CROSSER = ((40 - 40 * 0.5 ** 0.5, -40 * 0.5 ** 0.5), (0.5 ** 0.5, 0.5 ** 0.5))
+
+
+def test_last_moment_manoeuvre_keeps_course_and_speed_until_the_turn_then_turns_hard_over():
+    stbd = last_moment_manoeuvre(*CROSSER, 30.0)
+    port = last_moment_manoeuvre(*CROSSER, 30.0, port=True)
+    before = stbd.t < 30.0 - 1e-9
+    assert np.all(stbd.delta_c[before] == 0.0) and np.allclose(stbd.delta_c[~before], math.radians(35.0))
+    assert np.allclose(port.delta_c[~before], -math.radians(35.0))
+    assert np.allclose(stbd.state("psi")[before], 0.0) and np.allclose(stbd.state("y")[before], 0.0)
+    k = int(np.searchsorted(stbd.t, 30.0))
+    assert stbd.state("x")[k] == pytest.approx(30.0, abs=0.05)  # the approach speed kept
+    assert stbd.state("psi")[-1] > math.radians(90) and port.state("psi")[-1] < -math.radians(90)
+    # the closest approach is the minimum of the distance to the target's straight track
+    target = np.array(CROSSER[0]) + stbd.t[:, None] * np.array(CROSSER[1])
+    d = np.hypot(stbd.state("x") - target[:, 0], stbd.state("y") - target[:, 1])
+    assert stbd.metrics["min_distance"] == pytest.approx(d.min()) and stbd.metrics["t_min"] == stbd.t[d.argmin()]
+
+
+def test_last_moment_manoeuvre_passes_closer_the_later_the_turn():
+    passing = [last_moment_manoeuvre(*CROSSER, t).metrics["min_distance"] for t in (28.0, 32.0, 35.0, 38.0, 40.0)]
+    assert all(a > b for a, b in zip(passing, passing[1:]))
+    assert passing[0] > 4.0 and passing[-1] < 1.0  # at the meeting time the turn comes too late
+
+
+@pytest.mark.parametrize("kw, field", [(dict(rudder_deg=40.0), "rudder"), (dict(speed=0.1), "speed"),
+                                       (dict(t_end=20.0), "t_end")])
+def test_last_moment_manoeuvre_refuses_bad_input(kw, field):
+    with pytest.raises(ParameterError, match=field):
+        last_moment_manoeuvre(*CROSSER, 30.0, **kw)
+    with pytest.raises(ParameterError, match="t_turn"):
+        last_moment_manoeuvre(*CROSSER, -1.0)

@@ -32,11 +32,16 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
-from mmg_casadi.errors import InputError
+from mmg_casadi.colregs.geometry import bearing
+from mmg_casadi.colregs.profiles import scoring_profile
+from mmg_casadi.colregs.roles import classify_roles
+from mmg_casadi.errors import InputError, check_range
 from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_goal, draw_path, marine_axes
 from mmg_casadi.guidance.methods import NAMES as METHODS
+from mmg_casadi.params import PARAMETERS
 from mmg_casadi.scenarios.run import run_scenario
 from mmg_casadi.scenarios.scenario import scenario_from_dict
+from mmg_casadi.vessel.maneuvers import last_moment_manoeuvre, turning_circle
 
 MEET_DISTANCE = 40.0  #: L, own ship start to the common meeting point
 GOAL_PAST = 30.0  #: L, own ship goal beyond the meeting point (targets: scaled by their speed)
@@ -116,6 +121,78 @@ def imazu_case(k: int, *, method: str, targets: str = "hold", t_max: float = T_M
                       "heading": head, "speed": speed, "waypoints": [[round(float(v), 9) + 0.0 for v in goal]],
                       "method": "none" if targets == "hold" else method})
     return {"settings": {"method": method, "t_max": float(t_max)}, "ships": ships}
+
+
+def stand_on_bound(k: int, *, profile=None, rudder_deg: float = 35.0, step: float = 0.25) -> list[dict]:
+    """What a stand-on own ship can still do in Imazu problem ``k`` when every target holds course and speed and she
+    keeps hers as the scorer asks (Rule 17(a)): the widest passing of her last-moment manoeuvre.
+
+    Every ship reaches the meeting point at t = 40 without manoeuvres, so the give-way ship's inaction becomes
+    apparent at a known time: the scoring profile's ``late``, TCPA ``late_tcpa`` or range ``late_range``,
+    whichever comes first (at the start if it has already come). A stand-on ship may act alone from then on; her
+    action is her first change of course of ``course_tolerance_deg`` (Rule 17(a)(i) counts nothing smaller), so
+    the earliest lawful hard-over turn is the one that reaches that change at ``late``. Each turn from then to the
+    meeting time, in ``step`` steps, to either side (:func:`~mmg_casadi.vessel.maneuvers.last_moment_manoeuvre`,
+    the KCS at full propeller speed), is tried; the best is reported. Below the collision distance no such turn
+    keeps her safe: she must act before ``late``, which breaks 17(a)(ii) unless a give-way duty to another ship
+    covers her manoeuvre (or slip under the scorer's tolerances from the onset, reading a measurement tolerance
+    as leave).
+
+    Parameters
+    ----------
+    k : int
+        Problem number, 1 to 22.
+    profile : str or ScoringProfile, optional
+        Scoring profile (default ``iitm-lab``, :func:`~mmg_casadi.colregs.profiles.scoring_profile`).
+    rudder_deg : float
+        Rudder angle of the turn (degrees, (0, 35]).
+    step : float
+        Spacing of the times of the turn tried (L/U, > 0).
+
+    Returns
+    -------
+    list of dict
+        One row per target: ``target``, ``role`` (the own ship's, at the onset, as the scorer judges it),
+        ``t_late`` (L/U), ``range_late`` (L), ``passing`` (the widest closest approach, L), ``side`` and
+        ``t_turn`` of that manoeuvre, and ``safe`` (``passing`` at least the collision distance).
+
+    Examples
+    --------
+    Case 10: the second target crosses from port at a fine angle, closing at 0.26 U; when her inaction is
+    apparent (TCPA 4) she is 1.0 L away:
+
+    >>> row = stand_on_bound(10)[1]
+    >>> row["role"], round(row["range_late"], 2), row["safe"]
+    ('stand-on', 1.04, False)
+    """
+    k = _check_case(k)
+    prof = scoring_profile(profile)
+    step = check_range("step", step, 0.0, None, low_open=True, unit="L/U")
+    t_meet = MEET_DISTANCE
+    turn = turning_circle(rudder_deg, t_end=10.0)
+    t_tol = float(turn.t[np.argmax(np.abs(np.degrees(turn.state("psi"))) >= prof.course_tolerance_deg)])
+    rows = []
+    for i, (head, speed) in enumerate(_targets(k)):
+        e = np.array([math.cos(math.radians(head)), math.sin(math.radians(head))])
+        velocity = speed * e
+        start = np.array([MEET_DISTANCE, 0.0]) - speed * MEET_DISTANCE * e
+        closing = float(np.hypot(*(velocity - np.array([1.0, 0.0]))))
+        tcpa_late = min(max(prof.late_tcpa or 0.0, (prof.late_range or 0.0) / closing), t_meet)  # from the start
+        t_late = t_meet - tcpa_late
+        beta = bearing((0.0, 0.0), 0.0, start)
+        alpha = bearing(start, math.radians(head), (0.0, 0.0))
+        role = str(classify_roles(beta, alpha, 0.0, math.radians(head), 1.0, speed, prof))
+        best = None
+        for t_turn in np.arange(max(t_late - t_tol, 0.0), t_meet + step / 2, step):
+            for port in (False, True):
+                m = last_moment_manoeuvre(start, velocity, float(t_turn), port=port, rudder_deg=rudder_deg,
+                                          t_end=t_meet + 20.0).metrics
+                if best is None or m["min_distance"] > best["min_distance"]:
+                    best = m
+        rows.append({"target": f"target{i + 1}", "role": role, "t_late": t_late, "range_late": closing * tcpa_late,
+                     "passing": best["min_distance"], "side": best["side"], "t_turn": best["t_turn"],
+                     "safe": bool(best["min_distance"] >= PARAMETERS["collision_distance"].default)})
+    return rows
 
 
 def run_imazu(method: str, targets: str = "hold", *, cases=tuple(CASES), params: dict | None = None) -> list[dict]:

@@ -150,6 +150,82 @@ def turning_circle(rudder_deg: float = 35.0, *, port: bool = False, speed: float
     return res
 
 
+def _last_moment_step(ship: ShipParams, steering: SteeringParams) -> ca.Function:
+    """Step of the last-moment manoeuvre: rudder amidships until the turn (state row ``NX``: time), then hard over."""
+    f = build_mmg(ship, steering)
+    x = ca.SX.sym("x", NX + 1)
+    p = ca.SX.sym("p", 4)  # delta_c after the turn, n_rpm, dt, time of the turn
+    dc = ca.if_else(x[NX] >= p[3] - p[2] / 2, p[0], 0.0)
+    return ca.Function("last_moment_step", [x, p], [ca.vertcat(rk4(f, x[:NX], (dc, p[1]), p[2]), x[NX] + p[2]), dc])
+
+
+def last_moment_manoeuvre(target_start, target_velocity, t_turn: float, *, port: bool = False,
+                          rudder_deg: float = 35.0, speed: float = 1.0, t_end: float | None = None,
+                          ship: ShipParams | None = None, steering: SteeringParams | None = None) -> ManeuverResult:
+    """Course and speed kept until ``t_turn``, then the rudder hard over: the closest approach to a ship that holds
+    course and speed.
+
+    The own ship starts at the origin heading along x at ``speed``; the target starts at ``target_start`` and
+    sails at ``target_velocity`` (both in that frame: L, U). What a stand-on ship can still do once she may act
+    alone (Rule 17(a)(ii)) against a give-way ship that never acts; the propeller speed stays at its approach
+    value. Metrics: ``min_distance`` (L) and ``t_min`` (L/U), the closest approach from the start to ``t_end``,
+    ``t_turn``, ``rudder_deg`` and ``side``.
+
+    Parameters
+    ----------
+    target_start, target_velocity : sequence of 2 floats
+        The target's position at t = 0 (L) and her constant velocity over the ground (U).
+    t_turn : float
+        Time the rudder is put over (L/U, ≥ 0).
+    port : bool, default False
+        Hard over to port instead of starboard.
+    rudder_deg : float
+        Rudder angle magnitude (degrees, (0, 35]).
+    speed : float
+        Approach speed (fraction of the design speed, [0.2, 1.2]).
+    t_end : float, optional
+        Duration (L/U, > ``t_turn``); default ``t_turn`` + 20.
+    ship, steering : ShipParams, SteeringParams, optional
+        Ship and steering gear (default: the KCS).
+
+    Returns
+    -------
+    ManeuverResult
+        Time history (t in L/U, states, rudder command) with ``metrics``.
+
+    Examples
+    --------
+    A ship crossing from 45° on the port bow at the same speed, met at (40, 0) at t = 40; turning hard to starboard
+    at t = 30 passes her, at t = 38 does not:
+
+    >>> start, v = (40 - 40 * 0.5 ** 0.5, -40 * 0.5 ** 0.5), (0.5 ** 0.5, 0.5 ** 0.5)
+    >>> round(last_moment_manoeuvre(start, v, 30.0).metrics["min_distance"], 1)
+    5.8
+    >>> last_moment_manoeuvre(start, v, 38.0).metrics["min_distance"] < 2.0
+    True
+    """
+    ship = ship or load_kcs()
+    steering = steering or load_steering()
+    check_range("rudder", rudder_deg, 0.0, steering.delta_max_deg, low_open=True, unit="degrees")
+    check_range("speed", speed, 0.2, 1.2, unit="(fraction of design speed)")
+    check_range("t_turn", t_turn, 0.0, None, unit="L/U")
+    t_end = t_turn + 20.0 if t_end is None else check_range("t_end", t_end, t_turn, None, low_open=True, unit="L/U")
+    n = propeller_rpm_for_speed(speed, ship)
+    sign = -1.0 if port else 1.0
+    steps = int(math.ceil(t_end / DT))
+    X, U = _roll(_last_moment_step(ship, steering), [speed, 0, 0, 0, 0, 0, 0, 0.0],
+                 [sign * math.radians(rudder_deg), n, DT, t_turn], steps)
+    t = np.arange(X.shape[1]) * DT
+    res = ManeuverResult("last-moment", t, X[:NX].T, np.append(U, U[-1]))
+    target = np.asarray(target_start, dtype=float)[None, :] + t[:, None] * np.asarray(target_velocity, dtype=float)
+    dist = np.hypot(res.state("x") - target[:, 0], res.state("y") - target[:, 1])
+    k = int(np.argmin(dist))
+    res.metrics = {"maneuver": "last-moment", "min_distance": float(dist[k]), "t_min": float(t[k]),
+                   "t_turn": float(t_turn), "rudder_deg": float(rudder_deg), "side": "port" if port else "starboard",
+                   "units": {"distances": "L", "times": "L/U_des", "angles": "deg"}}
+    return res
+
+
 def _crossing(t, y, level):
     """Time and index where ``y`` first reaches ``level`` (linear interpolation)."""
     k = int(np.argmax(y >= level))
