@@ -276,7 +276,9 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "(Rule 17(b) close quarters; 0 disables)", "our choice: cv_r_act's 8 L, the range at which the stand-on ship "
        "acts whatever the TCPA", "colregs-vortex"),
     _P("cv_d_cq", 3.0, 0.0, None, "L", "combined radius of those collision cones (linear velocity obstacle, Huang "
-       "et al. 2018)", "our choice: 1.5 × the 2 L collision distance, as cv_d_cpa_act", "colregs-vortex",
+       "et al. 2018); for a ship the own ship holds her course for, while the TCPA is above cv_t_act, r_tol_vortex "
+       "instead (the filter acts only on a collision course while the give-way ship can still act)",
+       "our choice: 1.5 × the 2 L collision distance, as cv_d_cpa_act", "colregs-vortex",
        low_open=True),
     _P("cv_dpsi_cq_deg", 45.0, 0.0, 180.0, "deg", "the filter judges the heading the ship turns through next, at most "
        "this far from its own on the way to the field's", "our choice: about the KCS's turn in half of cv_t_close; "

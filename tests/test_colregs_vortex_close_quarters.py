@@ -85,6 +85,33 @@ def test_the_ship_never_turns_towards_a_close_ship(nb, nb_vel):
 
 
 
+def crossing_from_port(tcpa, passing):
+    """A design-speed ship crossing from port at 90° (the own ship stands on), CPA ``passing`` after ``tcpa``,
+    passing ahead of the own ship."""
+    v = np.array([0.0, 1.0])
+    rel = v - [1.0, 0.0]
+    return list(-rel * tcpa + passing * np.array([rel[1], -rel[0]]) / np.linalg.norm(rel)), list(v)
+
+
+@pytest.mark.parametrize("passing, filtered", [(2.5, False), (1.5, True)])
+def test_a_held_ship_is_filtered_only_on_a_collision_course_while_the_give_way_ship_can_act(passing, filtered):
+    # within r_cq, TCPA 5 above t_act: the give-way ship can still act, the own ship keeps her course (17(a)(i));
+    # a passing distance inside d_cq but outside the collision distance r_tol is left to the give-way ship
+    pos, vel = crossing_from_port(5.0, passing)
+    assert math.hypot(*pos) < CV.r_cq and 5.0 > CV.t_act and passing < CV.d_cq
+    assert (passing < KW["r_tol"]) == filtered
+    assert not feasible(0.0, [pos], [vel], [1])  # inside the d_cq cone: the filter would have turned her
+    h = heading([pos], [vel])
+    assert heading([pos], [vel], r_cq=0.0) == pytest.approx(0.0, abs=1e-9)  # the rules alone: hold
+    if filtered:  # on a collision course the last resort acts, to starboard
+        assert h > math.radians(10.0)
+    else:
+        assert h == pytest.approx(0.0, abs=1e-9)
+    # once the TCPA is below t_act the stand-on ship acts alone (17(a)(ii)), whatever the passing distance
+    pos, vel = crossing_from_port(3.5, passing)
+    assert abs(heading([pos], [vel])) > math.radians(10.0)
+
+
 def test_symbolic_function_matches_numeric_call_with_the_filter_acting():
     x = ca.SX.sym("x", 2)
     nb = ca.SX.sym("nb", 2, 2)

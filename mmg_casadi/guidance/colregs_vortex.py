@@ -71,9 +71,11 @@ The own ship's *planned course* is the bearing of its next waypoint at its curre
   through next on its way to the field's, at most ``dpsi_cq`` from its present heading (a reversal to starboard
   through a ship abeam is not admissible because its end point is); if it is inside a cone, the ship steers the
   admissible heading closest to a readily apparent alteration of its present heading to starboard
-  (``dpsi_min``, Rule 8) (the least-penetrating candidate if none is admissible). Terms of several neighbours,
-  or of a neighbour and the rules, can cancel or point into a third ship; this filter is what keeps their sum
-  out of the way of whatever is close.
+  (``dpsi_min``, Rule 8) (the least-penetrating candidate if none is admissible). The cone of a ship the own
+  ship holds her course for, while the TCPA is above ``t_act`` (the give-way ship can still act), has the
+  collision distance ``r_tol`` as its radius: the filter then acts only on a collision course. Terms of several
+  neighbours, or of a neighbour and the rules, can cancel or point into a third ship; this filter is what keeps
+  their sum out of the way of whatever is close.
 - **Land** (layouts with walls or land only): the close-quarters filter and the stand-on action also treat a
   heading whose straight path at the present speed reaches a wall or land edge within ``vo_land_horizon`` as
   inadmissible (:func:`~mmg_casadi.guidance.velocity_obstacle.land_blocked`), so the side the ship turns to is
@@ -569,7 +571,11 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
     # the heading the ship turns through next: at most dpsi_cq from its own on the way to the field's
     psi_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_cq), dpsi_cq)
     speed = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
-    ok = heading_feasible(own_pos, speed, psi_next, nb_pos, nb_vel, close, collision_distance=d_cq, **land)
+    # a ship the own ship holds her course for, while that ship can still act (TCPA above t_act): her cone has
+    # the collision distance r_tol as radius (Rule 17(b), the last resort; 17(a)(ii) waits for her inaction)
+    held = active * t["holding"] * (t["tcpa"] > t_act)
+    ok = heading_feasible(own_pos, speed, psi_next, nb_pos, nb_vel, close,
+                          collision_distance=d_cq - (d_cq - r_tol) * held, **land)
     psi_pref = own_psi + dpsi_min  # a readily apparent alteration to starboard (Rule 8) is preferred
     e_pref = ca.vertcat(ca.cos(psi_pref), ca.sin(psi_pref))
     psi_vo = velocity_obstacle(own_pos, speed, own_pos + e_pref, nb_pos, nb_vel, close, collision_distance=d_cq,

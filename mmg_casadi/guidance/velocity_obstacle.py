@@ -643,8 +643,8 @@ def heading_feasible(own_pos, own_speed, heading, nb_pos, nb_vel, active, *, col
         Neighbour velocities (U), one column per neighbour (2×M).
     active : sequence of float or casadi row
         0/1 mask per neighbour (1×M; a scalar is repeated): only active neighbours have a cone.
-    collision_distance : float or casadi scalar
-        Combined radius D of the cones (L).
+    collision_distance : float, casadi scalar or row (1×M)
+        Combined radius D of the cones (L); a row gives each neighbour its own.
     cone : {"huang", "wide"}
         Cone half-angle formula (see the module notes).
     walls : array_like or casadi matrix, optional
@@ -667,16 +667,20 @@ def heading_feasible(own_pos, own_speed, heading, nb_pos, nb_vel, active, *, col
     [0, 0, 1]
     >>> int(heading_feasible([0, 0], 1.0, 0.0, nb, v, [0], collision_distance=2.0))  # inactive: no cone
     1
+    >>> nb2, v2 = ca.DM([[10, 0], [0, 10]]), ca.DM.zeros(2, 2)  # ahead and abeam; the one ahead with D = 1
+    >>> [int(heading_feasible([0, 0], 1.0, h, nb2, v2, [1, 1], collision_distance=[1.0, 2.0])) for h in (0.0, 0.15)]
+    [0, 1]
     """
     _check_structure(2, cone)
     own_pos, nb_pos, nb_vel = _col2(own_pos), _matrix(nb_pos, 2), _matrix(nb_vel, 2)
     m = nb_pos.size2()
     active = _row(active, m)
+    radius = _row(collision_distance, m)
     v = own_speed * ca.vertcat(ca.cos(heading), ca.sin(heading))
     ok = 1
     for i in range(m):
         los = nb_pos[:, i] - own_pos
-        half = _half_angle(ca.fmax(ca.norm_2(los), R_MIN), collision_distance, cone)
+        half = _half_angle(ca.fmax(ca.norm_2(los), R_MIN), radius[i], cone)
         w = v - nb_vel[:, i]
         angle = ca.atan2(ca.fabs(los[0] * w[1] - los[1] * w[0]), los[0] * w[0] + los[1] * w[1])
         forb = (active[i] > 0) * (ca.sumsqr(w) > 1e-12) * (angle < half)
