@@ -43,7 +43,7 @@ class ManeuverResult:
     Parameters
     ----------
     kind : str
-        Manoeuvre name, ``'turning'`` or ``'zigzag'``.
+        Manoeuvre name: ``'turning'``, ``'zigzag'``, ``'speed'`` or ``'last-moment'``.
     t : numpy.ndarray
         Sample times, shape ``(T,)`` (L/U).
     states : numpy.ndarray
