@@ -71,6 +71,13 @@ def _targets(k: int) -> list[tuple[float, float]]:
     return out
 
 
+def _track(head: float, speed: float) -> tuple[np.ndarray, np.ndarray]:
+    """Start (L) and unit direction of a target on ``head`` (degrees) at ``speed`` that reaches the meeting point
+    at t = ``MEET_DISTANCE`` without manoeuvres."""
+    e = np.array([math.cos(math.radians(head)), math.sin(math.radians(head))])
+    return np.array([MEET_DISTANCE, 0.0]) - speed * MEET_DISTANCE * e, e
+
+
 def _check_case(k) -> int:
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k not in CASES:
         raise InputError("case", "an integer from 1 to 22", k)
@@ -114,8 +121,7 @@ def imazu_case(k: int, *, method: str, targets: str = "hold", t_max: float = T_M
     ships = [{"name": "own", "start": [0.0, 0.0], "heading": 0.0, "speed": 1.0,
               "waypoints": [[MEET_DISTANCE + GOAL_PAST, 0.0]]}]
     for i, (head, speed) in enumerate(_targets(k)):
-        e = np.array([math.cos(math.radians(head)), math.sin(math.radians(head))])
-        start = meet - speed * MEET_DISTANCE * e
+        start, e = _track(head, speed)
         goal = meet + speed * GOAL_PAST * e
         ships.append({"name": f"target{i + 1}", "start": [round(float(v), 9) + 0.0 for v in start],
                       "heading": head, "speed": speed, "waypoints": [[round(float(v), 9) + 0.0 for v in goal]],
@@ -173,9 +179,8 @@ def stand_on_bound(k: int, *, profile=None, rudder_deg: float = 35.0, step: floa
     t_tol = float(turn.t[np.argmax(np.abs(np.degrees(turn.state("psi"))) >= prof.course_tolerance_deg)])
     rows = []
     for i, (head, speed) in enumerate(_targets(k)):
-        e = np.array([math.cos(math.radians(head)), math.sin(math.radians(head))])
+        start, e = _track(head, speed)
         velocity = speed * e
-        start = np.array([MEET_DISTANCE, 0.0]) - speed * MEET_DISTANCE * e
         closing = float(np.hypot(*(velocity - np.array([1.0, 0.0]))))
         tcpa_late = min(max(prof.late_tcpa or 0.0, (prof.late_range or 0.0) / closing), t_meet)  # from the start
         t_late = t_meet - tcpa_late

@@ -8,6 +8,7 @@ propeller-speed order through the engine (:func:`~mmg_casadi.vessel.actuators.en
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -97,7 +98,11 @@ def _speed_step(ship: ShipParams, steering: SteeringParams) -> ca.Function:
 
 
 def _roll(step: ca.Function, x0, p, n_steps: int):
-    F = compile_function(step).mapaccum(n_steps)
+    return _run(compile_function(step).mapaccum(n_steps), x0, p)
+
+
+def _run(F: ca.Function, x0, p):
+    """States (initial column first) and commands of a rolled-out step ``F`` from ``x0`` with parameters ``p``."""
     X, U = F(x0, p)
     X = np.hstack([np.asarray(x0, float)[:, None], np.array(X)])
     return X, np.array(U).ravel()
@@ -150,13 +155,17 @@ def turning_circle(rudder_deg: float = 35.0, *, port: bool = False, speed: float
     return res
 
 
-def _last_moment_step(ship: ShipParams, steering: SteeringParams) -> ca.Function:
-    """Step of the last-moment manoeuvre: rudder amidships until the turn (state row ``NX``: time), then hard over."""
+@functools.lru_cache(maxsize=8)
+def _last_moment_rollout(ship: ShipParams, steering: SteeringParams, n_steps: int) -> ca.Function:
+    """The last-moment manoeuvre's step, compiled and rolled over ``n_steps``: rudder amidships until the turn
+    (state row ``NX``: time), then hard over. Built once per ship, steering gear and length, because
+    :func:`~mmg_casadi.scenarios.imazu.stand_on_bound` tries many times of the turn."""
     f = build_mmg(ship, steering)
     x = ca.SX.sym("x", NX + 1)
     p = ca.SX.sym("p", 4)  # delta_c after the turn, n_rpm, dt, time of the turn
     dc = ca.if_else(x[NX] >= p[3] - p[2] / 2, p[0], 0.0)
-    return ca.Function("last_moment_step", [x, p], [ca.vertcat(rk4(f, x[:NX], (dc, p[1]), p[2]), x[NX] + p[2]), dc])
+    step = ca.Function("last_moment_step", [x, p], [ca.vertcat(rk4(f, x[:NX], (dc, p[1]), p[2]), x[NX] + p[2]), dc])
+    return compile_function(step).mapaccum(n_steps)
 
 
 def last_moment_manoeuvre(target_start, target_velocity, t_turn: float, *, port: bool = False,
@@ -213,8 +222,8 @@ def last_moment_manoeuvre(target_start, target_velocity, t_turn: float, *, port:
     n = propeller_rpm_for_speed(speed, ship)
     sign = -1.0 if port else 1.0
     steps = int(math.ceil(t_end / DT))
-    X, U = _roll(_last_moment_step(ship, steering), [speed, 0, 0, 0, 0, 0, 0, 0.0],
-                 [sign * math.radians(rudder_deg), n, DT, t_turn], steps)
+    X, U = _run(_last_moment_rollout(ship, steering, steps), [speed, 0, 0, 0, 0, 0, 0, 0.0],
+                [sign * math.radians(rudder_deg), n, DT, t_turn])
     t = np.arange(X.shape[1]) * DT
     res = ManeuverResult("last-moment", t, X[:NX].T, np.append(U, U[-1]))
     target = np.asarray(target_start, dtype=float)[None, :] + t[:, None] * np.asarray(target_velocity, dtype=float)
