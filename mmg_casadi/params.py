@@ -264,7 +264,8 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("cv_v_ship_min", 0.05, 0.0, None, "U", "slower neighbours are static obstacles without a COLREG role, and a "
        "ship that closes more slowly than this is past (alongside on a parallel course her CPA never comes)",
        "our choice: below the slowest ship speed a scenario allows (0.2)", "colregs-vortex", low_open=True),
-    _P("cv_r_guard", 5.0, 0.0, None, "L", "range inside which every neighbour also repels radially (last resort)",
+    _P("cv_r_guard", 5.0, 0.0, None, "L", "range inside which a static obstacle, and a ship while she is a risk of collision (closing, passing below "
+       "cv_d_risk) or within the collision distance, also repels radially (last resort)",
        "our choice: about the KCS's advance in a 90° turn plus the collision distance", "colregs-vortex",
        low_open=True),
     _P("cv_lam_guard", 15.0, 0.0, None, "L²/(L/U)", "strength of that radial repulsion λ (1/d − 1/r_guard)",

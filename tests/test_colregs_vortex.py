@@ -158,6 +158,24 @@ def test_static_obstacle_near_the_goal_is_passed_wider():
     assert h_mv > 0 and h_cv > h_mv + 10.0
 
 
+@pytest.mark.parametrize("pos, vel, pushes", [
+    ([2.0, 4.5], [-1.0, 0.0], False),  # reciprocal course, passing clear at 4.5 L > d_risk, 4.9 L off
+    ([2.0, 3.5], [-1.0, 0.0], True),  # the same ship passing at 3.5 L: a risk of collision
+    ([-1.0, 1.5], [-1.0, 0.0], True),  # opening, but within the collision distance (1.8 L)
+    ([4.0, 2.5], [0.0, 0.0], True),  # a static obstacle
+])
+def test_the_guard_pushes_only_what_is_a_risk_or_within_the_collision_distance(pos, vel, pushes):
+    t = terms(pos, vel)
+    d = math.hypot(*pos)
+    assert d < CV.r_guard
+    assert float(t["guard"]) == pytest.approx(CV.lam_guard * (1 / d - 1 / CV.r_guard) if pushes else 0.0)
+
+
+def test_a_ship_passing_clear_within_the_guard_range_does_not_turn_the_own_ship():
+    # on the starboard bow, 4.9 L off, passing at 4.5 L: the goal bearing (a push would turn her to port)
+    assert heading(FAR_GOAL, [2.0, 4.5], [-1.0, 0.0]) == pytest.approx(0.0, abs=1e-9)
+
+
 def test_no_neighbours_means_straight_to_the_goal():
     v = colregs_vortex(goal=[3.0, 4.0], nb_pos=ca.DM(2, 0), nb_vel=ca.DM(2, 0), active=ca.DM(1, 0), **OWN, **KW)
     assert float(heading_of(v)) == pytest.approx(math.atan2(4.0, 3.0))

@@ -62,8 +62,11 @@ The own ship's *planned course* is the bearing of its next waypoint at its curre
   moderate rate. A risk of collision that arises mid-turn then finds her with a swing she can check within 10°
   (:class:`ColregsVortexParams`); at full rate she swings on past the heading she had at its onset, which as
   stand-on or head-on ship breaks 17(a)(i) or Rule 14.
-- **Guard**: inside ``r_guard`` every neighbour also pushes radially, λ_guard (1/d − 1/r_guard), a last-resort
-  term for whatever the rules above did not resolve.
+- **Guard**: inside ``r_guard`` a static obstacle, and a ship while she is a risk of collision (the range closes
+  and the passing distance is below ``d_risk``) or within the collision distance ``r_tol``, also push radially,
+  λ_guard (1/d − 1/r_guard), a last-resort term for whatever the rules above did not resolve. A ship passing
+  clear does not push: the push would turn the own ship off her course (to port for a ship on the starboard
+  bow) and could make a new risk of collision.
 - **Close quarters** (Rule 17(b) "best aid to avoid collision", Rule 2(b) departure to avoid immediate danger):
   the heading of the whole field is kept unless its velocity (at the current speed) lies inside the collision
   cone of a ship or obstacle within ``r_cq``, the linear velocity obstacle with combined radius ``d_cq``
@@ -152,8 +155,9 @@ class ColregsVortexParams:
         Neighbours slower than this are static obstacles without COLREG role, and a ship that closes more slowly
         than this is past (U, > 0); 0.05 is below the slowest ship speed a scenario allows (0.2).
     r_guard : float
-        Range inside which every neighbour also repels radially (L, > 0); 5 L = 2.5 collision distances, about
-        the KCS's advance in a full-rudder 90° turn plus the collision distance.
+        Range inside which a static obstacle, and a ship while she is a risk of collision or within the collision
+        distance, also repels radially (L, > 0); 5 L = 2.5 collision distances, about the KCS's advance in a
+        full-rudder 90° turn plus the collision distance.
     lam_guard : float
         Strength of that repulsion, λ (1/d − 1/r_guard) (L²/unit time, ≥ 0; 0 disables it); 15 makes it 2,
         about twice the capped sink, at 3 L.
@@ -477,7 +481,11 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     # the ship in an orbit about an obstacle when the goal is far and its sink weak)
     k_vor = mv["k_vor"] * (ship * duty + (1 - ship) * (mv["v_r"] < 0))
     threat = ship * ((duty + act) > 0)
-    guard = lam_guard * ca.fmax(0, 1 / d - 1 / r_guard)  # radial push away inside r_guard, whatever the rules
+    # radial push away inside r_guard, whatever the rules: from a static obstacle always, from a ship while she is
+    # a risk of collision (closing, passing below d_risk) or within the collision distance r_tol; a ship passing
+    # clear would only be pushed off (to port for one on the starboard bow), and that turn can make a new risk
+    guard = lam_guard * ca.fmax(0, 1 / d - 1 / r_guard) \
+        * ((1 - ship) + ship * ((((1 - past) * (dcpa < d_risk)) + (d < r_tol)) > 0))
     avoid = ((k_vor != 0) + act + threat + holding + (d < r_guard)) > 0
     return {"beta": beta, "d": d, "ship": ship, "risk": risk, "role_now": role_now, "role": role,
             "stand_on": stand_on, "head_on": head_on, "crossing": crossing, "tcpa": tcpa, "dcpa": dcpa,
