@@ -578,15 +578,14 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
         out = ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_f), ca.sin(psi_f))
     # the heading the ship turns through next: at most dpsi_cq from its own on the way to the field's
     psi_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_cq), dpsi_cq)
-    speed = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
     # a ship the own ship holds her course for, while that ship can still act (TCPA above t_act): her cone has
     # the collision distance r_tol as radius (Rule 17(b), the last resort; 17(a)(ii) waits for her inaction)
     held = active * t["holding"] * (t["tcpa"] > t_act)
-    ok = heading_feasible(own_pos, speed, psi_next, nb_pos, nb_vel, close,
+    ok = heading_feasible(own_pos, speed_now, psi_next, nb_pos, nb_vel, close,
                           collision_distance=d_cq - (d_cq - r_tol) * held, **land)
     psi_pref = own_psi + dpsi_min  # a readily apparent alteration to starboard (Rule 8) is preferred
     e_pref = ca.vertcat(ca.cos(psi_pref), ca.sin(psi_pref))
-    psi_vo = velocity_obstacle(own_pos, speed, own_pos + e_pref, nb_pos, nb_vel, close, collision_distance=d_cq,
+    psi_vo = velocity_obstacle(own_pos, speed_now, own_pos + e_pref, nb_pos, nb_vel, close, collision_distance=d_cq,
                                n_candidates=n_candidates, current_heading=own_psi, **land)
     psi_out = ca.if_else(ok, psi_f, psi_vo)
     # speed (Rule 8(e)): the stand-on ship's cut when she acts for a ship crossing from port, the give-way ship's
@@ -599,8 +598,8 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
     if isinstance(speed_extremis, (int, float)) and speed_extremis == 0:  # a zero cut: the test is not built
         return heading, 1 - cut, t
     psi_vo_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_vo - own_psi), -dpsi_cq), dpsi_cq)
-    slow_speed = ca.fmax(speed * (1 - speed_extremis), 1e-3)
-    no_turn = (1 - ok) * (1 - heading_feasible(own_pos, speed, psi_vo_next, nb_pos, nb_vel, close,
+    slow_speed = ca.fmax(speed_now * (1 - speed_extremis), 1e-3)
+    no_turn = (1 - ok) * (1 - heading_feasible(own_pos, speed_now, psi_vo_next, nb_pos, nb_vel, close,
                                                collision_distance=d_cq)) \
         * heading_feasible(own_pos, slow_speed, psi_vo_next, nb_pos, nb_vel, close, collision_distance=d_cq)
     factor = 1 - ca.fmax(cut, speed_extremis * no_turn * (ca.sum2(close) > 0))
