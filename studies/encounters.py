@@ -12,7 +12,8 @@ ship's safety, COLREG verdicts (:func:`mmg_casadi.colregs.scorer.score_encounter
   those kept, and ``wall_s``, the run's wall-clock time (the only column that differs between repeated runs);
 * ``DIR/encounters.csv``: per situation, method and target (:data:`ENCOUNTER_COLUMNS`): the requested encounter
   type (from the set's ``generation.json``, if any), the own ship's role as the scorer classified the run, whether
-  it is the generated one, ``applicable`` (a risk of collision arose), ``compliant``, ``score``, the rules not kept
+  it is the generated one, ``applicable`` (a risk of collision arose and reached its CPA, so the scorer judged it;
+  an unfinished encounter is not judged), ``compliant``, ``score``, the rules not kept
   and ``cpa`` (L, the closest approach to that target);
 * ``DIR/summary.md``: per method the rates with Wilson 95 % intervals, and every pair of methods compared paired
   (:func:`mmg_casadi.montecarlo.stats.paired_comparison`, exact McNemar): the safe flag paired by situation, the
@@ -87,7 +88,7 @@ def _encounter_rows(res, situation: str, method: str, requested: list) -> list[d
     rows = []
     for j, ship in enumerate(res.scenario.ships[1:]):
         pair = next((p for p in m["pairs"] if p["a"] == own and p["b"] == ship.name), None)
-        found = [e for e in (pair["encounters"]["a"] if pair else []) if e["applicable"]]
+        found = [e for e in (pair["encounters"]["a"] if pair else []) if e["applicable"] and e["compliant"] is not None]
         kind = requested[j] if j < len(requested) else None
         role = found[0]["role"] if found else None
         failed = sorted({r for e in found for r, v in e["rules"].items() if v is not None and not v["verdict"]})

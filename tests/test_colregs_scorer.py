@@ -664,17 +664,16 @@ def test_classify_roles_sectors():
 def test_a_stand_on_ship_that_reaches_her_goal_mid_encounter_has_not_slowed(stop):
     """The paper's crossing; the stand-on ship reaches her goal at ``stop`` (after the onset at 14.5) and keeps
     her position. Her speed at the arrival sample is a one-sided difference of her sailing positions: she kept
-    course and speed (17(a)(i)). A central difference across the arrival halved it (scorer version 1: a 50 % speed
-    reduction, 17(a)(i) and 17(a)(ii) broken)."""
+    her speed. A central difference across the arrival halved it (scorer version 1: a 50 % speed reduction,
+    17(a)(i) and 17(a)(ii) broken). The encounter ends there, 7 L or more apart and closing: since scorer version 4
+    it is unfinished and not judged at all."""
     t = np.arange(0.0, 40.0, 0.25)
     b = np.column_stack([25 + 0 * t, 25 - np.minimum(t, stop)])
     pos = np.stack([np.column_stack([t, 0 * t]), b], axis=1)
     psi = np.column_stack([0 * t, -np.pi / 2 + 0 * t])
     active = np.column_stack([np.ones(t.size, bool), t <= stop])
     (e,) = score_encounters(t, pos, psi, active=active, own=1)
-    assert (e.role, e.onset["t"]) == ("stand-on", 14.5)
-    assert e.rules["17a_i"].verdict and e.rules["17a_i"].terms["speed_decrease"] == 0.0
-    assert "17a_ii" not in e.rules  # she never acted
+    assert (e.role, e.onset["t"], e.unfinished, e.compliant) == ("stand-on", 14.5, True, None)
     k = int(np.flatnonzero(t == stop)[0])
     assert np.linalg.norm(ground_velocity(t, pos, active)[k, 1]) == pytest.approx(1.0)
     assert np.linalg.norm(ground_velocity(t, pos)[k, 1]) == pytest.approx(0.5)  # what version 1 measured
@@ -707,3 +706,44 @@ def test_a_turn_of_the_stand_on_ship_that_sweeps_her_course_line_is_no_crossing_
     assert len(ahead) == (1 if crossed else 0)
     if crossed:
         assert ahead[0] == pytest.approx(9.95, abs=0.05)
+
+
+def _crossing_until(t_stop):
+    """The paper's crossing with both ships holding course (they would meet at t = 25); the other ship stops
+    sailing (reaches her goal) after ``t_stop``."""
+    t = np.arange(0.0, 40.0, 0.25)
+    pos = np.stack([np.column_stack([t, 0 * t]), np.column_stack([25 + 0 * t, 25 - t])], axis=1)
+    psi = np.column_stack([0 * t, -np.pi / 2 + 0 * t])
+    active = np.column_stack([np.ones(t.size, bool), t <= t_stop])
+    return score_encounters(t, pos, psi, active=active, own=0)
+
+
+def test_an_encounter_that_ends_before_its_cpa_is_unfinished_and_not_judged():
+    (e,) = _crossing_until(20.0)  # 7.1 L apart and closing when the other ship arrives
+    assert e.applicable and e.unfinished and e.role == "give-way"
+    assert e.rules == {} and e.compliant is None and e.score is None
+    assert e.release["t"] == e.closest["t"] == 20.0
+    d = e.to_dict()
+    assert d["unfinished"] is True and all(v is None for v in d["rules"].values())
+
+
+@pytest.mark.parametrize("t_stop", [24.5, 40.0])  # within the safe distance before she stops; never stops
+def test_an_encounter_that_came_close_or_passed_its_cpa_is_judged(t_stop):
+    (e,) = _crossing_until(t_stop)
+    assert not e.unfinished and e.compliant is False
+    assert {r: v.verdict for r, v in e.rules.items()} == {"8": False, "16": False, "15": False}
+
+
+def test_the_monte_carlo_columns_leave_an_unfinished_encounter_out():
+    from mmg_casadi.montecarlo.execution import own_ship_encounters
+
+    def columns(t_stop):
+        t = np.arange(0.0, 40.0, 0.25)
+        states = np.zeros((t.size, 2, 4))
+        states[:, 0, 0] = t
+        states[:, 1, :3] = np.column_stack([25 + 0 * t, 25 - np.minimum(t, t_stop), -np.pi / 2 + 0 * t])
+        states[:, 1, 3] = t > t_stop  # 1: reached her goal
+        return own_ship_encounters(t, states)
+
+    assert columns(20.0)["colregs_risky"] == 0 and columns(20.0)["colregs_compliant"] is None
+    assert (columns(40.0)["colregs_risky"], columns(40.0)["colregs_lawful"]) == (1, 0)

@@ -11,7 +11,10 @@ and graded score (numpy, vectorised over the stored trajectory).
 3. rules of the role (:mod:`mmg_casadi.colregs.give_way_rules`, :mod:`mmg_casadi.colregs.stand_on_rules`): Rules
    8, 13, 14, 15, 16, 17(a)(i), 17(a)(ii), 17(b), 17(c), each a :class:`~mmg_casadi.colregs.verdict.RuleResult`;
 4. several ships (:mod:`mmg_casadi.colregs.duties`): conflicting duties flagged (Rule 2(b)); 17(a)(i) excused
-   while a give-way duty to another ship is open.
+   while a give-way duty to another ship is open;
+5. an encounter that ends before its closest point of approach (:func:`unfinished`: a ship stopped sailing, or the
+   run ended, while the range still closed) is ``unfinished``: its rules are not judged, since every rule's verdict
+   and score is taken at the actual CPA, which it never reached.
 
 An encounter's ``score`` is the mean of its rules' scores, ``compliant`` whether every applicable rule is kept.
 Thresholds: a :class:`~mmg_casadi.colregs.profiles.ScoringProfile` (``iitm-lab`` by default, or ``ntnu-2023``).
@@ -33,14 +36,16 @@ from mmg_casadi.colregs.roles import ENCOUNTER_OF_ROLE, GIVE_WAY_ROLES
 from mmg_casadi.colregs.stand_on_rules import stand_on_rules
 from mmg_casadi.colregs.verdict import RULES, json_value
 
-SCORER_VERSION = 3
+SCORER_VERSION = 4
 """Version of the verdicts :func:`score_encounters` gives: a statistics table records it and is resumed only by the
 same version. 2: a ship's speed at the sample she stops (reaches her goal) is a one-sided difference of her
 positions (:func:`~mmg_casadi.colregs.kinematics.ground_velocity` with ``active``); version 1 halved it there, which
 counted her arrival as a speed reduction. 3: a crossing of the other ship's course line (Rules 13 and 15) is the own
 ship's change of side of the line as it was at the earlier sample
 (:func:`~mmg_casadi.colregs.manoeuvre.course_line_crossings`); versions 1 and 2 also counted the other ship's turn
-that swept her course line across the own ship as the own ship crossing ahead."""
+that swept her course line across the own ship as the own ship crossing ahead. 4: an encounter that ends before its
+CPA (a ship reaches her goal, or the run ends, while the range still closes) is unfinished and not judged
+(:func:`unfinished`); version 3 took the range at its end as the CPA."""
 
 
 @dataclass(frozen=True)
@@ -70,6 +75,9 @@ class Encounter:
         Ships towards which the own ship had an open duty of the other kind at the same time (Rule 2(b)).
     quantities : dict
         The classification and timing quantities (bearings, speeds, baseline, ample time, must-act time, ...).
+    unfinished : bool
+        Whether the encounter ended before its CPA (:func:`unfinished`); then ``rules`` is empty and neither
+        ``score`` nor ``compliant`` is given.
 
     Examples
     --------
@@ -92,6 +100,7 @@ class Encounter:
     rules: dict = field(default_factory=dict)
     conflicts_with: tuple = ()
     quantities: dict = field(default_factory=dict)
+    unfinished: bool = False
 
     @property
     def score(self) -> float | None:
@@ -115,12 +124,13 @@ class Encounter:
         Returns
         -------
         dict
-            Keys ``own``, ``other``, ``profile``, ``applicable``, ``encounter``, ``role``, ``onset``, ``release``,
-            ``closest``, ``score``, ``compliant``, ``conflicting_duties``, ``conflicts_with``, ``rules`` and
-            ``quantities``; NaN and infinities as None.
+            Keys ``own``, ``other``, ``profile``, ``applicable``, ``unfinished``, ``encounter``, ``role``,
+            ``onset``, ``release``, ``closest``, ``score``, ``compliant``, ``conflicting_duties``,
+            ``conflicts_with``, ``rules`` and ``quantities``; NaN and infinities as None.
         """
         return json_value({
             "own": self.own_name, "other": self.other_name, "profile": self.profile, "applicable": self.applicable,
+            "unfinished": self.unfinished,
             "encounter": self.encounter, "role": self.role, "onset": self.onset, "release": self.release,
             "closest": self.closest, "score": self.score, "compliant": self.compliant,
             "conflicting_duties": self.conflicting_duties, "conflicts_with": list(self.conflicts_with),
@@ -149,6 +159,45 @@ def _check_shape(samples: int, ships: int, **arrays) -> None:
     for name, a in arrays.items():
         if a.shape != (samples, ships):
             raise ValueError(f"{name}: expected shape ({samples}, {ships}), got {a.shape}")
+
+
+def unfinished(episode, both, rng, tcpa, d_safe) -> bool:
+    """Whether an encounter ended before its closest point of approach.
+
+    It did when it ends at the last sample of the pair's stretch of sailing (a ship stops there, or the run ends),
+    its smallest range is that last one, the straight-line TCPA there is still positive (the range closes) and no
+    range below ``d_safe`` was seen. The published schemes take every verdict and score at the actual CPA, which
+    such an encounter never reached: its rules are not judged.
+
+    Parameters
+    ----------
+    episode : RiskEpisode
+        The encounter's onset, CPA and release samples.
+    both : array-like of bool (T,)
+        Whether both ships sail.
+    rng, tcpa : array-like (T,)
+        Range (L) and straight-line TCPA (L/U).
+    d_safe : float
+        The profile's safe passing distance (L): an encounter that came closer is judged, whatever its end.
+
+    Returns
+    -------
+    bool
+        True if the encounter is unfinished.
+
+    Examples
+    --------
+    Closing at unit speed; the other ship reaches her goal at sample 4, 3 L off; then the same with the range
+    opening there:
+
+    >>> from mmg_casadi.colregs.risk import RiskEpisode
+    >>> r, both = 7.0 - np.arange(6.0), np.arange(6) <= 4
+    >>> unfinished(RiskEpisode(1, 4, 4), both, r, r - 1.0, 2.0), unfinished(RiskEpisode(1, 4, 4), both, r, 1 - r, 2.0)
+    (True, False)
+    """
+    k = episode.release
+    last = k == len(both) - 1 or not both[k + 1]
+    return bool(last and episode.cpa == k and tcpa[k] > 0.0 and rng[k] >= d_safe)
 
 
 def _run_start(both, k) -> int:
@@ -243,17 +292,18 @@ def score_encounters(t, pos, psi, speed=None, active=None, profile=None, *, name
             for k, ep in enumerate(episodes):
                 end = episodes[k + 1].onset - 1 if k + 1 < len(episodes) else last
                 contexts.append((j, encounter_context(t, ships[i], ships[j], gij, risk, ep,
-                                                      _run_start(both, ep.onset), end, profile)))
+                                                      _run_start(both, ep.onset), end, profile),
+                                 unfinished(ep, both, gij.range, gij.tcpa, profile.d_safe)))
         duties = [Duty(j, c.role, c.base if c.role in GIVE_WAY_ROLES else c.episode.onset, c.episode.onset,
-                       c.episode.release) for j, c in contexts]
+                       c.episode.release) for j, c, _ in contexts]
         clash = conflicts(duties)
-        for k, (j, c) in enumerate(contexts):
-            rules = give_way_rules(c) if c.role in GIVE_WAY_ROLES else stand_on_rules(c, excused_samples(
-                duties, k, t.size))
+        for k, (j, c, cut) in enumerate(contexts):
+            rules = {} if cut else give_way_rules(c) if c.role in GIVE_WAY_ROLES else stand_on_rules(
+                c, excused_samples(duties, k, t.size))
             onset, release, closest = _times(c)
             out.append(Encounter(i, j, names[i], names[j], profile.name, True,
                                  ENCOUNTER_OF_ROLE[c.role], c.role, json_value(onset), json_value(release),
                                  json_value(closest), rules, tuple(names[x] for x in clash[k]),
-                                 json_value(_quantities(c))))
+                                 json_value(_quantities(c)), cut))
         out.extend(plain)
     return sorted(out, key=lambda e: (e.own, e.other, -1.0 if e.onset is None else e.onset["t"]))

@@ -229,7 +229,8 @@ HISTORY_EVERY = 2
 def own_ship_encounters(t, states, profile=None) -> dict:
     """``colregs_risky``, ``colregs_lawful``, ``colregs_score``, ``colregs_compliant`` and ``colregs_verdicts`` of
     one run: the own ship's (ship 0) encounters with a risk of collision, judged by
-    :func:`~mmg_casadi.colregs.scorer.score_encounters`.
+    :func:`~mmg_casadi.colregs.scorer.score_encounters`; an encounter that ends before its CPA is unfinished and not
+    counted.
 
     Only the ships that come within the profile's risk range ``r_risk`` of the own ship while both sail are
     scored (a ship farther away has no risk of collision and no duty; the verdicts are the same).

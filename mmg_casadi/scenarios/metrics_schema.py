@@ -120,6 +120,7 @@ def metrics_schema() -> dict:
         "other": {"type": "string"},
         "profile": _enum(SCORING_PROFILES),
         "applicable": {"type": "boolean"},
+        "unfinished": {"type": "boolean"},
         "encounter": _enum(encounter_types, null=True),
         "role": _enum(ROLES, null=True),
         "onset": {"oneOf": [{"type": "null"}, _obj({"t": _NUM, "range": _NUM, "cpa": _NUM, "tcpa": _NUM})]},
@@ -138,7 +139,8 @@ def metrics_schema() -> dict:
                                  "onset": {"type": "object"}, "release": {"type": "object"},
                                  "closest": {"type": "object"}}}},
         {"if": {"properties": {"applicable": {"const": False}}},
-         "then": {"properties": {"encounter": {"type": "null"}, "role": {"type": "null"}, "score": {"type": "null"},
+         "then": {"properties": {"unfinished": {"const": False}, "encounter": {"type": "null"},
+                                 "role": {"type": "null"}, "score": {"type": "null"},
                                  "compliant": {"type": "null"}, "rules": {"additionalProperties": {"type": "null"}},
                                  "quantities": {"required": ["min_range"]}}}},
     ]

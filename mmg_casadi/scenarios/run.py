@@ -18,7 +18,8 @@
 ``encounters`` is the encounter scorer's judgement of a ship pair (:func:`mmg_casadi.colregs.scorer.score_encounters`,
 under the parameter ``colregs_profile`` recorded in ``params``): per side, ``"a"`` from ship ``a``'s view and
 ``"b"`` from ``b``'s, a list of :meth:`~mmg_casadi.colregs.scorer.Encounter.to_dict` entries, one per stretch of
-risk of collision (``applicable``, ``onset``, ``release``, ``closest``, ``encounter``, ``role``, per rule of
+risk of collision (``applicable``, ``unfinished`` (it ended before its CPA and is not judged), ``onset``,
+``release``, ``closest``, ``encounter``, ``role``, per rule of
 :data:`~mmg_casadi.colregs.verdict.RULES` its ``verdict`` and ``score`` or ``null``, the total ``score``,
 ``compliant``, ``conflicting_duties`` and the ``quantities`` behind them), or a single entry with
 ``applicable: false`` if the side never had a risk of collision. A ship's duties towards several ships are judged
