@@ -485,7 +485,7 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
     # a risk of collision (closing, passing below d_risk) or within the collision distance r_tol; a ship passing
     # clear would only be pushed off (to port for one on the starboard bow), and that turn can make a new risk
     guard = lam_guard * ca.fmax(0, 1 / d - 1 / r_guard) \
-        * ((1 - ship) + ship * ((((1 - past) * (dcpa < d_risk)) + (d < r_tol)) > 0))
+        * ((1 - ship) + ship * ((risk + (d < r_tol)) > 0))
     avoid = ((k_vor != 0) + act + threat + holding + (d < r_guard)) > 0
     return {"beta": beta, "d": d, "ship": ship, "risk": risk, "role_now": role_now, "role": role,
             "stand_on": stand_on, "head_on": head_on, "crossing": crossing, "tcpa": tcpa, "dcpa": dcpa,
