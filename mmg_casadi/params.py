@@ -284,9 +284,10 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("cv_dpsi_cq_deg", 45.0, 0.0, 180.0, "deg", "the filter judges the heading the ship turns through next, at most "
        "this far from its own on the way to the field's", "our choice: about the KCS's turn in half of cv_t_close; "
        "beyond 10° of heading error the PD's rudder is saturated anyway", "colregs-vortex", low_open=True),
-    _P("cv_dpsi_free_deg", 15.0, 0.0, 180.0, "deg", "while a neighbour is within R_safe but nothing is avoided "
-       "and nothing is within cv_r_cq, the heading ordered is at most this far from the present one (a moderate "
-       "turn; 180 = no limit)",
+    _P("cv_dpsi_free_deg", 15.0, 0.0, 180.0, "deg", "while no neighbour is within R_safe (ILOS steers) and "
+       "the waypoint is farther than R_safe, or a neighbour is within R_safe but nothing is avoided and nothing is "
+       "within cv_r_cq, the heading ordered is at most this far from the present one (a moderate turn; 180 = no "
+       "limit)",
        "measured: the largest order ahead, in 5° steps, from whose steady turn (11.4°/(L/U)) the KCS under the "
        "closed loop's PD swings on by less than 10° when ordered to check her swing (6.9°; 20° ahead: 10.0°), the "
        "smallest alteration Cockcroft & Lameijer (p. 51) count as readily apparent (tests/test_colregs_vortex.py)",

@@ -1,5 +1,6 @@
 """colregs-vortex: Rule 17 stand-on behaviour, Rule 8, the near-goal fix, and its closed loop."""
 
+import dataclasses
 import math
 from importlib.resources import files
 
@@ -11,8 +12,10 @@ from mmg_casadi.closed_loop.layout import default_globals
 from mmg_casadi.guidance.colregs_encounters import GIVE_WAY
 from mmg_casadi.guidance.colregs_vortex import (FLOOR_STEP, ColregsVortexParams, colregs_vortex,
                                                colregs_vortex_terms)
-from mmg_casadi.errors import ParameterError
+from mmg_casadi.errors import InputError, ParameterError
+from mmg_casadi.guidance import methods
 from mmg_casadi.guidance.fields import heading_of, modified_vortex
+from mmg_casadi.params import PARAMETERS
 from mmg_casadi.scenarios.scenario import load_scenario, scenario_from_dict, with_method
 from mmg_casadi.scenarios.run import run_scenario
 
@@ -252,7 +255,6 @@ def test_the_kcs_checks_a_moderate_turn_within_ten_degrees():
     swing (the order becomes her heading then) she swings on by less than 10°, the smallest alteration that is
     readily apparent; from an order 20° ahead by 10° or more, and at full rate (90° ahead) by about 18°."""
     from mmg_casadi.guidance.heading_control import pd_heading
-    from mmg_casadi.params import PARAMETERS
     from mmg_casadi.vessel.mmg import build_mmg, propeller_rpm_for_speed, rk4
     from mmg_casadi.vessel.ship import load_kcs
 
@@ -277,6 +279,68 @@ def test_the_kcs_checks_a_moderate_turn_within_ten_degrees():
     rate, swing = swing_on(PARAMETERS["cv_dpsi_free_deg"].default)
     assert rate == pytest.approx(11.4, abs=0.3) and 5.0 < swing < 10.0
     assert swing_on(20.0)[1] > 9.9 and swing_on(90.0)[1] > 17.0
+
+
+def test_under_ilos_the_ordered_heading_stays_within_the_moderate_turn():
+    """No neighbour within R_safe, so ILOS steers: a colregs-vortex ship that starts 180° off her goal 30 L away is
+    ordered at most cv_dpsi_free_deg from her heading (the limit is lifted only within R_safe of the goal, where she
+    is already on course) and reaches the goal; the paper's modified vortex (no turn limit) orders the whole turn
+    at once."""
+    def alone(method):
+        return scenario_from_dict({"settings": {"method": method, "t_max": 60.0}, "ships": [
+            {"name": "own", "start": [0, 0], "heading": 180, "speed": 1.0, "waypoints": [[30, 0]]}]})
+
+    def ordered(result):
+        psi_d = result.trajectory.auxiliary("psi_d", 0)  # ordered during each step, from the state at its start
+        return np.degrees(np.abs(np.angle(np.exp(1j * (psi_d - result.trajectory.state("psi", 0)[:psi_d.size])))))
+
+    cv = run_scenario(alone("colregs-vortex"))
+    assert cv.metrics["ships"][0]["status"] == "reached"
+    assert ordered(cv).max() == pytest.approx(PARAMETERS["cv_dpsi_free_deg"].default, abs=1e-6)
+    assert ordered(run_scenario(alone("modified-vortex"))).max() > 170.0
+
+
+@pytest.mark.parametrize("r_safe, status", [(15.0, "reached"), (3.0, "timeout")])
+def test_within_r_safe_of_a_waypoint_ilos_turns_at_full_rate(r_safe, status):
+    """A waypoint 5 L on the starboard beam lies inside the moderate turning circle (radius about 5 L at
+    11.4°/(L/U)): within R_safe of it the limit is lifted and the ship reaches it; with an R_safe of 3 L the limit
+    still applies 5 L off and she circles the waypoint until the run ends."""
+    sc = scenario_from_dict({"settings": {"method": "colregs-vortex", "t_max": 80.0, "r_safe": r_safe}, "ships": [
+        {"name": "own", "start": [0, 0], "heading": 0, "speed": 1.0, "waypoints": [[0, 5]]}]})
+    assert run_scenario(sc).metrics["ships"][0]["status"] == status
+
+
+def mid_turn_crossing(method):
+    # the own ship starts heading east (090°) for a goal due north, a port turn of 90° that ILOS steers; a ship
+    # from her port side, also colregs-vortex, enters R_safe on a collision course with her new course mid-turn
+    return scenario_from_dict({"settings": {"method": method, "t_max": 80.0}, "ships": [
+        {"name": "own", "start": [0, 0], "heading": 90, "speed": 1.0, "waypoints": [[60, 0]]},
+        {"name": "other", "start": [10, -14], "heading": 90, "speed": 1.0, "waypoints": [[10, 40]]}]})
+
+
+def test_a_stand_on_encounter_that_opens_mid_turn_finds_a_swing_she_can_check():
+    """The mid-turn crossing: turning at the moderate rate she checks her swing within the 10° of Rule 17(a)(i)
+    and keeps every rule; the same method turning at full rate (no turn limit under ILOS) swings on past 20° to
+    port at the onset of risk and breaks 17(a)(i), 17(a)(ii) and 17(c)."""
+    (e,) = run_scenario(mid_turn_crossing("colregs-vortex")).metrics["pairs"][0]["encounters"]["a"]
+    assert e["role"] == "stand-on" and e["compliant"]
+    assert e["rules"]["17a_i"]["course_change_deg"] < 10.0
+    full = methods.register(dataclasses.replace(methods.METHODS["colregs-vortex"], name="cv-full-rate",
+                                                turn_limit=None))
+    try:
+        (e,) = run_scenario(mid_turn_crossing(full.name)).metrics["pairs"][0]["encounters"]["a"]
+    finally:
+        methods.unregister(full.name)
+    assert e["role"] == "stand-on" and not e["compliant"]
+    assert e["rules"]["17a_i"]["course_change_deg"] > 20.0
+    assert not any(e["rules"][k]["verdict"] for k in ("17a_i", "17a_ii", "17c"))
+
+
+def test_a_turn_limit_must_be_one_of_the_method_inputs():
+    bad = dataclasses.replace(methods.METHODS["colregs-vortex"], name="cv-bad-limit", turn_limit="kp")
+    with pytest.raises(InputError, match="method.turn_limit"):
+        methods.register(bad)
+    assert "cv-bad-limit" not in methods.METHODS
 
 
 @pytest.mark.parametrize("drift, holding", [(0.02, 0.0), (0.2, 1.0)])

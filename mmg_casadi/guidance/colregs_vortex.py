@@ -59,9 +59,11 @@ The own ship's *planned course* is the bearing of its next waypoint at its curre
 - **A moderate turn while free of encounters**: while a neighbour is within R_safe but nothing is avoided and
   nothing is within ``r_cq`` (where the close-quarters filter needs its whole reach), the field's heading is at
   most ``dpsi_free`` from the present one, so the ship turns back to her course (or towards her goal) at a
-  moderate rate. A risk of collision that arises mid-turn then finds her with a swing she can check within 10°
-  (:class:`ColregsVortexParams`); at full rate she swings on past the heading she had at its onset, which as
-  stand-on or head-on ship breaks 17(a)(i) or Rule 14.
+  moderate rate. While no neighbour is within R_safe and ILOS steers, the closed loop limits ILOS's heading in
+  the same way (``turn_limit`` of :class:`~mmg_casadi.guidance.methods.Method`) unless the waypoint is within
+  R_safe: the first turn of a ship that starts off her course is moderate too. A risk of collision that arises
+  mid-turn then finds her with a swing she can check within 10° (:class:`ColregsVortexParams`); at full rate she
+  swings on past the heading she had at its onset, which as stand-on or head-on ship breaks 17(a)(i) or Rule 14.
 - **Guard**: inside ``r_guard`` a static obstacle, and a ship while she is a risk of collision (the range closes
   and the passing distance is below ``d_risk``) or within the collision distance ``r_tol``, also push radially,
   λ_guard (1/d − 1/r_guard), a last-resort term for whatever the rules above did not resolve. A ship passing
@@ -191,10 +193,11 @@ class ColregsVortexParams:
         the same reason.
     dpsi_free : float
         While a neighbour is within R_safe but nothing is avoided and nothing is within ``r_cq``, the field's
-        heading is at most this far from the present heading (rad, (0, π]; π: no limit); 15°: the largest order
-        ahead (in 5° steps) from whose steady turn the KCS under the closed loop's PD, ordered to check her swing,
-        swings on by less than 10° (6.9°, at 11.4°/(L/U); 20° ahead: 10.0°), the smallest alteration Cockcroft &
-        Lameijer (p. 51) count as readily apparent.
+        heading, and while ILOS steers more than R_safe from the waypoint ILOS's heading, is at most this far from
+        the present heading (rad, (0, π]; π: no limit); 15°: the largest order ahead (in 5° steps) from whose steady
+        turn the KCS under the closed loop's PD, ordered to check her swing, swings on by less than 10° (6.9°, at
+        11.4°/(L/U); 20° ahead: 10.0°), the smallest alteration Cockcroft & Lameijer (p. 51) count as readily
+        apparent.
     """
 
     theta_head_on: float = param_field("cv_theta_head_on_deg", math.pi / 180.0)

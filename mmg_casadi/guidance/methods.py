@@ -140,6 +140,10 @@ class Method:
     wall_inputs : tuple of str
         Numeric step inputs the method reads only in layouts with walls or land (its land test); they enter the
         compiled step only of such layouts.
+    turn_limit : str or None
+        One of ``inputs``: while ILOS steers the ship (no neighbour within R_safe) and she is farther than R_safe
+        from her next waypoint, the heading ordered is at most this far from her present heading (rad), so she
+        turns at a moderate rate; None: ILOS's heading as it is.
     """
 
     name: str
@@ -151,6 +155,7 @@ class Method:
     memory: tuple[str, ...] = ()
     commands_speed: bool = False
     wall_inputs: tuple[str, ...] = ()
+    turn_limit: str | None = None
 
     def command_size(self) -> int:
         """Rows of the flat command vector (:func:`command_vector`): heading, rpm if any, memory rows.
@@ -330,7 +335,7 @@ METHODS: dict[str, Method] = {m.name: m for m in (
     Method("colregs-vortex", _colregs_vortex, ("sink-vortex", "modified-vortex", "colregs-vortex"),
            "ours: the modified vortex with COLREG Rules 8, 13 and 17 (mmg_casadi.guidance.colregs_vortex)",
            inputs=tuple(f"cv_{k}" for k in _CV_FIELDS), goal_capture=True, memory=colregs_vortex.MEMORY,
-           commands_speed=True, wall_inputs=LAND_INPUTS),
+           commands_speed=True, wall_inputs=LAND_INPUTS, turn_limit="cv_dpsi_free"),
 )}
 """Every method, by name (:func:`register` adds one)."""
 
@@ -369,6 +374,9 @@ def register(method: Method) -> Method:
     if method.name in METHODS:
         raise InputError("method.name", f"a name not yet registered (not one of: {', '.join(METHODS)})",
                          method.name)
+    if method.turn_limit is not None and method.turn_limit not in method.inputs:
+        raise InputError("method.turn_limit", f"None or one of the method's inputs ({', '.join(method.inputs)})",
+                         method.turn_limit)
     METHODS[method.name] = method
     return method
 
