@@ -38,7 +38,7 @@ from mmg_casadi.closed_loop.replay import replay_update
 from mmg_casadi.errors import ParameterError
 from mmg_casadi.guidance import hazards, methods
 from mmg_casadi.guidance.heading_control import pd_heading
-from mmg_casadi.guidance.ilos import ilos_step_terms, switch_waypoint, wrap_angle
+from mmg_casadi.guidance.ilos import ilos_step_terms, limit_turn, switch_waypoint
 from mmg_casadi.guidance.methods import GuidanceInputs, command_from_vector
 from mmg_casadi.vessel import environment
 from mmg_casadi.vessel.actuators import engine_step
@@ -238,7 +238,7 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         # the method's moderate turn also while ILOS steers, except within R_safe of the waypoint: there a ship
         # that arrives off her track could circle a waypoint that lies inside her moderate turning circle for ever
         lim = ca.if_else(ca.norm_2(goal - pos[i]) > P["r_safe"], P[spec.turn_limit], ca.pi)
-        psi_ilos = psi[i] + ca.fmin(ca.fmax(wrap_angle(psi_ilos - psi[i]), -lim), lim)
+        psi_ilos = limit_turn(psi[i], psi_ilos, lim)
     cmd = None  # the method's command, and whether a neighbour is within R_safe
     if spec.builder is None or (M == 0 and W == 0):
         psi_d = psi_ilos

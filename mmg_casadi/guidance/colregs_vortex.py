@@ -104,7 +104,7 @@ from mmg_casadi.guidance.fields import R_MIN, _col2, _matrix, _row, modified_vor
 from mmg_casadi.guidance.colregs_encounters import (ACTING, GIVE_WAY, HEAD_ON, MEMORY, OVERTAKEN, OVERTAKING,
                                                     STAND_ON, classify_role, open_encounters, recall, remember,
                                                     slots_of)
-from mmg_casadi.guidance.ilos import wrap_angle
+from mmg_casadi.guidance.ilos import limit_turn, wrap_angle
 from mmg_casadi.guidance.velocity_obstacle import heading_feasible, velocity_obstacle
 
 _BIG = 1.0e6
@@ -576,11 +576,10 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
         # nothing avoided and nothing within close quarters (where the filter below needs its whole reach): a
         # moderate turn, at most dpsi_free from the present heading
         free = (ca.sum2(active * t["avoid"]) == 0) * (ca.sum2(close) == 0)
-        turn = ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_free), dpsi_free)
-        psi_f = ca.if_else(free, own_psi + turn, psi_f)
+        psi_f = ca.if_else(free, limit_turn(own_psi, psi_f, dpsi_free), psi_f)
         out = ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_f), ca.sin(psi_f))
     # the heading the ship turns through next: at most dpsi_cq from its own on the way to the field's
-    psi_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_f - own_psi), -dpsi_cq), dpsi_cq)
+    psi_next = limit_turn(own_psi, psi_f, dpsi_cq)
     # a ship the own ship holds her course for, while that ship can still act (TCPA above t_act): her cone has
     # the collision distance r_tol as radius (Rule 17(b), the last resort; 17(a)(ii) waits for her inaction)
     held = active * t["holding"] * (t["tcpa"] > t_act)
@@ -600,7 +599,7 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
     heading = ca.sqrt(ca.sumsqr(out)) * ca.vertcat(ca.cos(psi_out), ca.sin(psi_out))
     if isinstance(speed_extremis, (int, float)) and speed_extremis == 0:  # a zero cut: the test is not built
         return heading, 1 - cut, t
-    psi_vo_next = own_psi + ca.fmin(ca.fmax(wrap_angle(psi_vo - own_psi), -dpsi_cq), dpsi_cq)
+    psi_vo_next = limit_turn(own_psi, psi_vo, dpsi_cq)
     slow_speed = ca.fmax(speed_now * (1 - speed_extremis), 1e-3)
     no_turn = (1 - ok) * (1 - heading_feasible(own_pos, speed_now, psi_vo_next, nb_pos, nb_vel, close,
                                                collision_distance=d_cq)) \

@@ -93,6 +93,34 @@ def wrap_angle(a):
     return w + 2 * ca.pi * (w <= -ca.pi)
 
 
+def limit_turn(psi, target, limit):
+    """The heading at most ``limit`` from ``psi`` on the shorter way to ``target`` (a limited turn).
+
+    Parameters
+    ----------
+    psi : float or casadi.SX or casadi.MX
+        Present heading (rad).
+    target : float or casadi.SX or casadi.MX
+        Heading to turn towards (rad).
+    limit : float or casadi.SX or casadi.MX
+        Largest turn (rad, ≥ 0; π or more: ``target`` itself, up to a multiple of 2π).
+
+    Returns
+    -------
+    float or casadi.SX or casadi.MX
+        ``psi`` plus the wrapped difference ``target − psi`` clipped to ±``limit`` (rad, not wrapped).
+
+    Examples
+    --------
+    >>> import math
+    >>> round(math.degrees(float(limit_turn(0.0, math.radians(170.0), math.radians(15.0)))), 6)
+    15.0
+    >>> round(math.degrees(float(limit_turn(0.0, math.radians(-170.0), math.pi))), 6)
+    -170.0
+    """
+    return psi + ca.fmin(ca.fmax(wrap_angle(target - psi), -limit), limit)
+
+
 def path_tangential_angle(wp_prev, wp_next):
     """Path tangential angle π_p of the segment ``wp_prev`` → ``wp_next`` (all four quadrants).
 
