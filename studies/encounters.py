@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.colregs.scorer import judged_encounters
 from mmg_casadi.guidance import methods as registry
 from mmg_casadi.io import write_text
 from mmg_casadi.montecarlo.stats import paired_comparison, wilson
@@ -88,7 +89,7 @@ def _encounter_rows(res, situation: str, method: str, requested: list) -> list[d
     rows = []
     for j, ship in enumerate(res.scenario.ships[1:]):
         pair = next((p for p in m["pairs"] if p["a"] == own and p["b"] == ship.name), None)
-        found = [e for e in (pair["encounters"]["a"] if pair else []) if e["applicable"] and e["compliant"] is not None]
+        found = judged_encounters(pair["encounters"]["a"] if pair else [])
         kind = requested[j] if j < len(requested) else None
         role = found[0]["role"] if found else None
         failed = sorted({r for e in found for r, v in e["rules"].items() if v is not None and not v["verdict"]})

@@ -31,6 +31,7 @@ from pathlib import Path
 
 from mmg_casadi.montecarlo.comparisons import compare_methods
 from mmg_casadi.closed_loop.problem import build_problem
+from mmg_casadi.colregs.scorer import judged_encounters
 from mmg_casadi.io import write_json
 from mmg_casadi.scenarios import encounters
 from mmg_casadi.guidance.methods import PAPER_STATISTICS
@@ -152,7 +153,7 @@ def _pair(metrics, a="ship1", b="ship2"):
 
 def _kept(encounters):
     """Whether a ship kept every rule in all of its encounters with a risk of collision (``None`` without one)."""
-    judged = [e["compliant"] for e in encounters if e["applicable"] and e["compliant"] is not None]
+    judged = [e["compliant"] for e in judged_encounters(encounters)]
     return all(judged) if judged else None
 
 

@@ -7,7 +7,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.colregs.profiles import iitm_lab
+from mmg_casadi.colregs.profiles import iitm_lab, scoring_profile
 from mmg_casadi.scenarios.imazu import CASES, imazu_case, plot_imazu, run_imazu, stand_on_bound
 from mmg_casadi.vessel.maneuvers import last_moment_manoeuvre, turning_circle
 from mmg_casadi.scenarios.scenario import scenario_from_dict
@@ -118,6 +118,32 @@ def test_every_target_on_a_collision_course_yields_a_scored_encounter():
         assert others == [f"target{i}" for i in range(1, N_TARGETS[r["case"]] + 1)], (r["case"], others)
     roles = {r["case"]: [e["role"] for e in r["encounters"]] for r in rows if r["case"] <= 4}
     assert roles == {1: ["head-on"], 2: ["give-way"], 3: ["overtaking"], 4: ["stand-on"]}
+
+
+def test_under_ntnu_2023_the_ample_time_of_a_duty_to_act_has_ended_at_the_start_in_fourteen_cases():
+    # ntnu-2023 (50 m per length) ends a give-way ship's ample time at stage 3, 22 L. Every ship starts 40 L from
+    # the meeting point, so a target whose course differs from the own ship's by D starts 80 sin(D/2) L away: a
+    # fine crossing or the slow ship ahead starts inside 22 L, and no action can come before the first sample
+    profile = scoring_profile("ntnu-2023")
+    rows = run_imazu("none", "hold", params={"colregs_profile": "ntnu-2023"})
+    late_at_start = {}
+    for r in rows:
+        ships = imazu_case(r["case"], method="none", targets="hold")["ships"]
+        start = {s["name"]: np.array(s["start"]) for s in ships}
+        for e in r["encounters"]:
+            if e["role"] == "stand-on":
+                continue
+            rule_8 = e["rules"]["8"]
+            r0 = float(np.linalg.norm(start[e["other"]] - start[ships[0]["name"]]))
+            assert (rule_8["t_late"] == 0.0) is (r0 <= profile.late_range), (r["case"], e["other"], r0)
+            if rule_8["t_late"] == 0.0:
+                late_at_start.setdefault(r["case"], []).append(e["role"])
+    # 10 give-way crossings (in 9 cases) and the 6 overtakings of the slow ship 20 L ahead, in 14 cases: whatever
+    # the own ship does, such an encounter is broken unless it ends before its CPA (unfinished, left out), so at
+    # most 8 cases can be kept
+    assert sum(roles.count("give-way") for roles in late_at_start.values()) == 10
+    assert sum(roles.count("overtaking") for roles in late_at_start.values()) == len(SLOW)
+    assert len(late_at_start) == 14 and len(CASES) - len(late_at_start) < 20
 
 
 def test_stand_on_bound_turns_at_the_earliest_lawful_time_and_finds_the_widest_passing():

@@ -113,6 +113,11 @@ class Encounter:
         return all(r.verdict for r in self.rules.values()) if self.rules else None
 
     @property
+    def judged(self) -> bool:
+        """Whether the encounter carries verdicts: a risk of collision, and not :func:`unfinished`."""
+        return self.applicable and self.compliant is not None
+
+    @property
     def conflicting_duties(self) -> bool:
         """Whether the own ship had conflicting duties during this encounter (Rule 2(b))."""
         return bool(self.conflicts_with)
@@ -136,6 +141,29 @@ class Encounter:
             "conflicting_duties": self.conflicting_duties, "conflicts_with": list(self.conflicts_with),
             "rules": {r: (self.rules[r].to_dict() if r in self.rules else None) for r in RULES},
             "quantities": self.quantities})
+
+
+def judged_encounters(encounters) -> list[dict]:
+    """The encounters of ``metrics.json`` (:meth:`Encounter.to_dict`) that carry verdicts, as :attr:`Encounter.judged`.
+
+    Parameters
+    ----------
+    encounters : iterable of dict
+        Encounters as stored in ``metrics.json`` (``pairs[].encounters.a`` or ``.b``).
+
+    Returns
+    -------
+    list of dict
+        Those with a risk of collision that are not unfinished, in their order.
+
+    Examples
+    --------
+    >>> rows = [{"applicable": False, "compliant": None}, {"applicable": True, "compliant": None},
+    ...         {"applicable": True, "compliant": False}]
+    >>> judged_encounters(rows)
+    [{'applicable': True, 'compliant': False}]
+    """
+    return [e for e in encounters if e["applicable"] and e["compliant"] is not None]
 
 
 def _as_arrays(t, pos, psi, speed, active):

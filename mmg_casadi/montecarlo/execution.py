@@ -275,7 +275,7 @@ def own_ship_encounters(t, states, profile=None) -> dict:
     risky = []
     if len(ships) > 1 and t.size > 1:  # one sample has no velocity, hence no risk of collision
         risky = [e for e in score_encounters(t, states[:, ships, :2], states[:, ships, 2], active=mask[:, ships],
-                                             profile=profile, own=0) if e.applicable and e.compliant is not None]
+                                             profile=profile, own=0) if e.judged]
     lawful = sum(1 for e in risky if e.compliant)
     return {"colregs_risky": len(risky), "colregs_lawful": lawful,
             "colregs_score": float(np.mean([e.score for e in risky])) if risky else math.nan,

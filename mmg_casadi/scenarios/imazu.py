@@ -35,6 +35,7 @@ from matplotlib.figure import Figure
 from mmg_casadi.colregs.geometry import bearing
 from mmg_casadi.colregs.profiles import scoring_profile
 from mmg_casadi.colregs.roles import classify_roles
+from mmg_casadi.colregs.scorer import judged_encounters
 from mmg_casadi.errors import InputError, check_range
 from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_goal, draw_path, marine_axes
 from mmg_casadi.guidance.methods import NAMES as METHODS
@@ -266,7 +267,7 @@ def own_encounters(result) -> list[dict]:
     for pair in result.metrics["pairs"]:
         side = "a" if pair["a"] == own else "b" if pair["b"] == own else None
         if side is not None:
-            out += [e for e in pair["encounters"][side] if e["applicable"] and e["compliant"] is not None]
+            out += judged_encounters(pair["encounters"][side])
     return out
 
 
