@@ -259,6 +259,15 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "head-on or crossing give-way ship alters at least until her straight line passes at this (Rule 16)",
        "our choice: twice the paper's 2 L collision distance (§Statistical Analysis), a passing with less than one "
        "collision distance of clearance, as the iitm-lab scoring profile's gate", "colregs-vortex", low_open=True),
+    _P("cv_r_look", 0.0, 0.0, None, "L", "how far beyond R_safe colregs-vortex sees a ship it must give way to "
+       "(head-on, crossing from starboard, overtaking): with a risk of collision (cv_d_risk) within R_safe + cv_r_look "
+       "such a ship opens the give-way duty there, and the method steers while that encounter lasts; stand-on "
+       "encounters and every other term keep R_safe; 0 = off", "COLREG Rules 7(b) (long-range scanning for early "
+       "warning of risk of collision) and 16 (early action). Off by default, measured in environment 5 (5000 runs, "
+       "seed 0, paired against 0): 3 L, success 98.84 -> 99.30 % (McNemar p = 0.002), risky encounters kept "
+       "(iitm-lab) -2.2 pp (p = 0.0005; stand-on 82.4 -> 71.4 %); 7 L, 99.22 % (p = 0.03), -5.6 pp, ntnu-2023 "
+       "+3.1 pp: a give-way turn far out is no duty the iitm-lab scorer sees, so it counts against the ship's "
+       "stand-on duties to third ships", "colregs-vortex"),
     _P("cv_d_clear", 6.0, 0.0, None, "L", "a give-way ship holds its alteration until the planned-course passing "
        "distance exceeds this", "our choice: 3 collision distances", "colregs-vortex", low_open=True),
     _P("cv_v_ship_min", 0.05, 0.0, None, "U", "slower neighbours are static obstacles without a COLREG role, and a "

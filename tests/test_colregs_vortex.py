@@ -336,11 +336,54 @@ def test_a_stand_on_encounter_that_opens_mid_turn_finds_a_swing_she_can_check():
     assert not any(e["rules"][k]["verdict"] for k in ("17a_i", "17a_ii", "17c"))
 
 
-def test_a_turn_limit_must_be_one_of_the_method_inputs():
-    bad = dataclasses.replace(methods.METHODS["colregs-vortex"], name="cv-bad-limit", turn_limit="kp")
-    with pytest.raises(InputError, match="method.turn_limit"):
+@pytest.mark.parametrize("attr", ["turn_limit", "lookout"])
+def test_a_turn_limit_or_lookout_must_be_one_of_the_method_inputs(attr):
+    bad = dataclasses.replace(methods.METHODS["colregs-vortex"], name="cv-bad-input", **{attr: "kp"})
+    with pytest.raises(InputError, match=f"method.{attr}"):
         methods.register(bad)
-    assert "cv-bad-limit" not in methods.METHODS
+    assert "cv-bad-input" not in methods.METHODS
+
+
+def crossing_that_holds(side, r_look):
+    """A target crossing at 90° from starboard (+1) or port (−1) that holds course and speed, on a collision course:
+    both ships 40 L from the meeting point, so the range begins at 56.6 L."""
+    return scenario_from_dict({"settings": {"method": "colregs-vortex", "t_max": 120.0, "cv_r_look": r_look},
+                               "ships": [
+        {"name": "own", "start": [0, 0], "heading": 0, "speed": 1.0, "waypoints": [[80, 0]]},
+        {"name": "target", "start": [40, 40 * side], "heading": 270 if side > 0 else 90, "speed": 1.0,
+         "waypoints": [[40, -40 * side]], "method": "none"}]})
+
+
+def first_alteration_range(result, deg=5.0):
+    """Range to the target when the own heading first differs from her initial one by ``deg``."""
+    psi = np.degrees(result.trajectory.state("psi", 0))
+    k = int(np.argmax(np.abs(psi - psi[0]) > deg))
+    assert k > 0
+    return float(result.own_distance()[k])
+
+
+@pytest.mark.parametrize("r_look", [3.0, 7.0])
+def test_the_lookout_gives_way_beyond_r_safe_to_a_ship_crossing_from_starboard(r_look):
+    """Rules 7(b) and 16: with cv_r_look the own ship begins her give-way alteration once the target is within
+    R_safe + cv_r_look, not at R_safe (15 L), and passes her wider, at least cv_d_risk off."""
+    base = run_scenario(crossing_that_holds(+1, 0.0))
+    look = run_scenario(crossing_that_holds(+1, r_look))
+    r_safe = PARAMETERS["r_safe"].default
+    assert first_alteration_range(base) <= r_safe
+    assert r_safe < first_alteration_range(look) <= r_safe + r_look
+    assert look.metrics["ships"][0]["status"] == "reached"
+    assert look.own_distance().min() > max(base.own_distance().min(), PARAMETERS["cv_d_risk"].default)
+    psi = np.degrees(look.trajectory.state("psi", 0))
+    assert psi[np.argmax(np.abs(psi) > 5.0)] > 0.0  # the alteration is to starboard (from x towards y)
+
+
+def test_the_lookout_leaves_a_stand_on_encounter_to_r_safe():
+    """A target crossing from port, which the own ship stands on for, is not seen earlier with a lookout: the
+    run is the same to the bit."""
+    base = run_scenario(crossing_that_holds(-1, 0.0)).trajectory
+    look = run_scenario(crossing_that_holds(-1, 7.0)).trajectory
+    np.testing.assert_array_equal(look.state("psi", 0), base.state("psi", 0))
+    np.testing.assert_array_equal(look.state("x", 0), base.state("x", 0))
 
 
 @pytest.mark.parametrize("drift, holding", [(0.02, 0.0), (0.2, 1.0)])

@@ -221,6 +221,9 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
 
     psi_ilos = terms["psi_d"]
     spec = methods.get(method, f"methods[{i}]")
+    look = active  # the neighbours the method gets as active: within R_safe, plus its lookout if it has one
+    if spec.lookout and M:
+        look = nb_present * _indicator(P["r_safe"] + P[spec.lookout] - d_nb, sm)
     n_service = Pi["leg_rpm"][0]  # the propeller speed of the leg being sailed (exact when every leg has one)
     for k in range(1, layout.max_path):
         n_service = ca.if_else(Xi[S_["idx"]] > k - 0.5, Pi["leg_rpm"][k], n_service)
@@ -257,15 +260,20 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         w_react = ca.fmax(any_active, near_wall) if sm is None else 1 - (1 - any_active) * (1 - near_wall)
         speed = ca.norm_2(vel[i]) if layout.disturbed else ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2)
         inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal,
-                                nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=active, P=P,
+                                nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=look, P=P,
                                 layout=layout, memory={k: Xi[S_[k]] for k in spec.memory},
                                 service_rpm=n_service, walls=walls if W else None,
                                 half_beam=Pi["half_beam"] if W else None)
         if sparse and M > 1:
-            command = command_from_vector(spec, within_range(layout, method, M)(ca.sum2(active),
+            command = command_from_vector(spec, within_range(layout, method, M)(ca.sum2(look),
                                                                                *dispatch_args(layout, inputs)))
         else:
             command = spec.builder(inputs)
+        if spec.engaged is not None and M:
+            # an encounter with a ship beyond R_safe, within the method's lookout, keeps the method in charge
+            engaged = spec.engaged(command.memory)
+            any_active = ca.fmax(any_active, engaged) if sm is None else 1 - (1 - any_active) * (1 - engaged)
+            w_react = ca.fmax(w_react, engaged) if sm is None else 1 - (1 - w_react) * (1 - engaged)
         cmd = (command, any_active > 0.5 if M else None)
         field_vec = command.heading + wall_vec
         if sm is None:

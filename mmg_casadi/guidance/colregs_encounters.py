@@ -18,7 +18,8 @@ other's bow (her heading taken from her velocity over the ground), in this order
    otherwise (Rules 15 and 17).
 
 **Risk of collision** (Rule 7), the onset: a ship within R_safe whose straight-line passing distance at the present
-velocities is below ``d_risk`` while the range closes.
+velocities is below ``d_risk`` while the range closes; with a lookout (``cv_r_look`` > 0) also a ship within
+R_safe + ``cv_r_look`` that the own ship gives way to (:func:`giveway_open`).
 
 **Memory** (:data:`MEMORY`, rows of the closed-loop state): :data:`SLOTS` encounter slots, each the position of its
 ship at the last step and a code ``CODE + role`` (``+ ACTING`` once a stand-on ship acts alone, so her action is
@@ -207,4 +208,35 @@ def slots_of(memory: dict) -> list:
         One ``(x, y, code)`` triple of memory entries per slot, ``SLOTS`` of them in slot order.
     """
     return [(memory[f"cv_slot{k}_x"], memory[f"cv_slot{k}_y"], memory[f"cv_slot{k}_code"]) for k in range(SLOTS)]
+
+
+def giveway_open(memory: dict):
+    """1 while a slot of ``memory`` (by name, :data:`MEMORY`) holds an encounter in which the own ship gives way
+    (give-way, head-on, overtaking), else 0: the ``engaged`` test of ``colregs-vortex``
+    (:class:`~mmg_casadi.guidance.methods.Method`), which keeps her in the method's charge while such a ship is
+    within R_safe + ``cv_r_look``.
+
+    Parameters
+    ----------
+    memory : dict
+        The method's memory rows after the step, by name.
+
+    Returns
+    -------
+    SX or bool
+        1 or 0 (a bool for numbers).
+
+    Examples
+    --------
+    >>> rows = {f"cv_slot{k}_{c}": 0.3 for k in range(SLOTS) for c in ("x", "y", "code")}  # free slots (a heading)
+    >>> int(giveway_open(rows)), int(giveway_open({**rows, "cv_slot1_code": CODE + GIVE_WAY}))
+    (0, 1)
+    >>> int(giveway_open({**rows, "cv_slot0_code": CODE + STAND_ON + ACTING}))
+    0
+    """
+    n = 0
+    for k in range(SLOTS):
+        r = memory[f"cv_slot{k}_code"] - CODE
+        n = n + (r > GIVE_WAY - 0.5) * (r < OVERTAKING + 0.5)
+    return n > 0.5
 

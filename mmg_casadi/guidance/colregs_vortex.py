@@ -13,6 +13,12 @@ The own ship's *planned course* is the bearing of its next waypoint at its curre
   head-on (Rule 14(c): a ship nearly ahead that has the own ship nearly ahead is head-on, in doubt), give-way
   (on the starboard side) or stand-on (on the port side). The role is kept in the method's memory rows until
   the encounter is released (the ship leaves R_safe), so neither ship's manoeuvre changes it.
+- **Lookout** (Rules 7(b) and 16, off by default): with ``cv_r_look`` > 0 the closed loop also gives the method the
+  ships within R_safe + ``cv_r_look``; beyond R_safe only a ship with a risk of collision that the own ship gives
+  way to (head-on, crossing from starboard, overtaking) opens an encounter, and only while that duty is open does
+  she count; the method keeps the ship while that encounter lasts
+  (:func:`~mmg_casadi.guidance.colregs_encounters.giveway_open`). Stand-on encounters and every other term keep
+  R_safe.
 - **Stand-on** (stand-on, overtaken; Rule 17). **17(a)(i)**: while the give-way ship can still act the own ship
   keeps the course she had at the onset (``cv_course``) and her speed: the ship part of the field is that
   course, and a static obstacle is circled only once within ``r_act`` (it would otherwise alter the course the
@@ -497,6 +503,12 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
             "escalate": escalate, "guard": guard, "avoid": avoid}
 
 
+def _within_duty(t, r_safe):
+    """1 for a neighbour within R_safe or one the own ship has a give-way duty to (beyond R_safe, within the
+    lookout ``cv_r_look``, only such a ship counts)."""
+    return ((t["d"] < r_safe) + t["duty"]) > 0
+
+
 def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink, k_vor0, r_safe, r_tol,
            gamma_max, theta_head_on, d_cpa_act, t_act, r_act, t_close, k_standon, dpsi_min, d_clear, v_ship_min,
            r_guard, lam_guard, d_att_floor, speed_cut, speed_giveway, speed_extremis, r_cq, d_cq, dpsi_cq,
@@ -518,6 +530,7 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
                              t_act=t_act, r_act=r_act, t_close=t_close, k_standon=k_standon, dpsi_min=dpsi_min,
                              d_clear=d_clear, v_ship_min=v_ship_min, r_guard=r_guard, lam_guard=lam_guard,
                              d_risk=d_risk, code=code, reference=base)
+    active = active * _within_duty(t, r_safe)
     avoid = active * t["avoid"]
     d_threat = ca.mmin(avoid * t["d"] + (1 - avoid) * _BIG)
     d_eff = ca.fmax(dist_goal, ca.if_else(d_threat < _BIG / 2, ca.fmax(d_threat, d_att_floor), 0))
@@ -765,13 +778,16 @@ def colregs_vortex_command(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, acti
                                **{k: v for k, v in kw.items()
                                   if k not in ("lam_sink", "n_candidates", "walls", "clearance", "horizon")})
     link, code = recall(nb_pos, active, slots_of(memory))
-    opened = active * now["risk"] * (code == 0)
-    link, code = open_encounters(nb_pos, active * now["risk"], now["role_now"], link, code)
+    # beyond R_safe (within the lookout, cv_r_look) only a ship the own ship gives way to opens an encounter
+    reach = ((now["d"] < kw["r_safe"]) + (now["role_now"] > GIVE_WAY - 0.5)) > 0
+    opened = active * reach * now["risk"] * (code == 0)
+    link, code = open_encounters(nb_pos, active * reach * now["risk"], now["role_now"], link, code)
     # a new give-way duty measures its alteration from the heading at its onset
     base = ca.if_else(ca.sum2(opened * (now["role_now"] > GIVE_WAY - 0.5)) > 0, own_psi, base)
     vec, factor, t = _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, code=code, course=course,
                             base=base, **kw)
     code_next = t["role"] + ACTING * t["acting"]
+    active = active * _within_duty(t, kw["r_safe"])
     busy = ca.sum2(active * ((t["duty"] + t["act"]) > 0)) > 0
     holding = ca.sum2(active * t["holding"]) > 0
     out = remember(nb_pos, link, code_next, own_psi)

@@ -34,6 +34,7 @@ from mmg_casadi.guidance import colregs_vortex
 from mmg_casadi.guidance import fields
 
 from mmg_casadi.guidance import velocity_obstacle
+from mmg_casadi.guidance.colregs_encounters import giveway_open
 from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams
 from mmg_casadi.errors import InputError, ParameterError
 from mmg_casadi.vessel.library import load_vessel
@@ -144,6 +145,13 @@ class Method:
         One of ``inputs``: while ILOS steers the ship (no neighbour within R_safe) and she is farther than R_safe
         from her next waypoint, the heading ordered is at most this far from her present heading (rad), so she
         turns at a moderate rate; None: ILOS's heading as it is.
+    lookout : str or None
+        One of ``inputs``: the builder also gets the neighbours within R_safe plus this range (L) as active, and
+        ignores those beyond R_safe it has no use for; None: R_safe.
+    engaged : callable or None
+        ``memory -> SX``, from the method's memory rows after the step (by name): 1 while the method steers although
+        no neighbour is within R_safe (an encounter with a ship within its lookout), so the closed loop neither
+        hands the ship to ILOS nor resets the memory; None: the method steers only with a neighbour within R_safe.
     """
 
     name: str
@@ -156,6 +164,8 @@ class Method:
     commands_speed: bool = False
     wall_inputs: tuple[str, ...] = ()
     turn_limit: str | None = None
+    lookout: str | None = None
+    engaged: Callable | None = None
 
     def command_size(self) -> int:
         """Rows of the flat command vector (:func:`command_vector`): heading, rpm if any, memory rows.
@@ -334,8 +344,9 @@ METHODS: dict[str, Method] = {m.name: m for m in (
     Method("none", None, (), "ILOS waypoint tracking only (a ship that holds its course)"),
     Method("colregs-vortex", _colregs_vortex, ("sink-vortex", "modified-vortex", "colregs-vortex"),
            "ours: the modified vortex with COLREG Rules 8, 13 and 17 (mmg_casadi.guidance.colregs_vortex)",
-           inputs=tuple(f"cv_{k}" for k in _CV_FIELDS), goal_capture=True, memory=colregs_vortex.MEMORY,
-           commands_speed=True, wall_inputs=LAND_INPUTS, turn_limit="cv_dpsi_free"),
+           inputs=(*(f"cv_{k}" for k in _CV_FIELDS), "cv_r_look"), goal_capture=True, memory=colregs_vortex.MEMORY,
+           commands_speed=True, wall_inputs=LAND_INPUTS, turn_limit="cv_dpsi_free", lookout="cv_r_look",
+           engaged=giveway_open),
 )}
 """Every method, by name (:func:`register` adds one)."""
 
@@ -374,9 +385,11 @@ def register(method: Method) -> Method:
     if method.name in METHODS:
         raise InputError("method.name", f"a name not yet registered (not one of: {', '.join(METHODS)})",
                          method.name)
-    if method.turn_limit is not None and method.turn_limit not in method.inputs:
-        raise InputError("method.turn_limit", f"None or one of the method's inputs ({', '.join(method.inputs)})",
-                         method.turn_limit)
+    for attr in ("turn_limit", "lookout"):
+        value = getattr(method, attr)
+        if value is not None and value not in method.inputs:
+            raise InputError(f"method.{attr}", f"None or one of the method's inputs ({', '.join(method.inputs)})",
+                             value)
     METHODS[method.name] = method
     return method
 
