@@ -239,4 +239,3 @@ def giveway_open(memory: dict):
         r = memory[f"cv_slot{k}_code"] - CODE
         n = n + (r > GIVE_WAY - 0.5) * (r < OVERTAKING + 0.5)
     return n > 0.5
-
