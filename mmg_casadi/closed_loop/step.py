@@ -61,6 +61,11 @@ def _indicator(cond_margin, smooth):
     return 0.5 * (1 + ca.tanh(0.5 * smooth * cond_margin))
 
 
+def _either(a, b, smooth):
+    """1 where ``a`` or ``b`` is 1 (exact: their maximum), or ``1 − (1 − a)(1 − b)`` for smooth indicators."""
+    return ca.fmax(a, b) if smooth is None else 1 - (1 - a) * (1 - b)
+
+
 def build_closed_loop_step(layout: Layout, *, n_sub: int = 1, sparse: bool = False) -> ca.Function:
     """Named Function ``closed_loop_<key>(x, p) -> (x_next, aux)`` for one guidance step of the whole scenario.
 
@@ -257,7 +262,7 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         if W:
             wall_vec = hazards.KINDS["wall"].field(pos[i], walls, P)
             near_wall = _indicator(ca.sumsqr(wall_vec) - 1e-12, sm)
-        w_react = ca.fmax(any_active, near_wall) if sm is None else 1 - (1 - any_active) * (1 - near_wall)
+        w_react = _either(any_active, near_wall, sm)
         speed = ca.norm_2(vel[i]) if layout.disturbed else ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2)
         inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal,
                                 nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=look, P=P,
@@ -272,8 +277,8 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         if spec.engaged is not None and M:
             # an encounter with a ship beyond R_safe, within the method's lookout, keeps the method in charge
             engaged = spec.engaged(command.memory)
-            any_active = ca.fmax(any_active, engaged) if sm is None else 1 - (1 - any_active) * (1 - engaged)
-            w_react = ca.fmax(w_react, engaged) if sm is None else 1 - (1 - w_react) * (1 - engaged)
+            any_active = _either(any_active, engaged, sm)
+            w_react = _either(w_react, engaged, sm)
         cmd = (command, any_active > 0.5 if M else None)
         field_vec = command.heading + wall_vec
         if sm is None:

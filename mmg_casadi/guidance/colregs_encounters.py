@@ -210,6 +210,28 @@ def slots_of(memory: dict) -> list:
     return [(memory[f"cv_slot{k}_x"], memory[f"cv_slot{k}_y"], memory[f"cv_slot{k}_code"]) for k in range(SLOTS)]
 
 
+def gives_way(role):
+    """1 where ``role`` (a role code, or a slot's code less :data:`CODE`) is one in which the own ship gives way:
+    give-way, head-on or overtaking (not a stand-on or overtaken code, with or without :data:`ACTING`).
+
+    Parameters
+    ----------
+    role : SX, DM or float
+        Role codes.
+
+    Returns
+    -------
+    SX, DM or bool
+        1 or 0 per element.
+
+    Examples
+    --------
+    >>> [bool(gives_way(r)) for r in (STAND_ON, OVERTAKEN, GIVE_WAY, HEAD_ON, OVERTAKING, STAND_ON + ACTING)]
+    [False, False, True, True, True, False]
+    """
+    return (role > GIVE_WAY - 0.5) * (role < OVERTAKING + 0.5)
+
+
 def giveway_open(memory: dict):
     """1 while a slot of ``memory`` (by name, :data:`MEMORY`) holds an encounter in which the own ship gives way
     (give-way, head-on, overtaking), else 0: the ``engaged`` test of ``colregs-vortex``
@@ -234,8 +256,4 @@ def giveway_open(memory: dict):
     >>> int(giveway_open({**rows, "cv_slot0_code": CODE + STAND_ON + ACTING}))
     0
     """
-    n = 0
-    for k in range(SLOTS):
-        r = memory[f"cv_slot{k}_code"] - CODE
-        n = n + (r > GIVE_WAY - 0.5) * (r < OVERTAKING + 0.5)
-    return n > 0.5
+    return sum(gives_way(memory[f"cv_slot{k}_code"] - CODE) for k in range(SLOTS)) > 0.5

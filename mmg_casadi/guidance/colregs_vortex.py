@@ -108,8 +108,8 @@ from mmg_casadi.params import PARAMETERS, check_fields
 from mmg_casadi.params import field as param_field
 from mmg_casadi.guidance.fields import R_MIN, _col2, _matrix, _row, modified_vortex_terms, vortex
 from mmg_casadi.guidance.colregs_encounters import (ACTING, GIVE_WAY, HEAD_ON, MEMORY, OVERTAKEN, OVERTAKING,
-                                                    STAND_ON, classify_role, open_encounters, recall, remember,
-                                                    slots_of)
+                                                    STAND_ON, classify_role, gives_way, open_encounters, recall,
+                                                    remember, slots_of)
 from mmg_casadi.guidance.ilos import limit_turn, wrap_angle
 from mmg_casadi.guidance.velocity_obstacle import heading_feasible, velocity_obstacle
 
@@ -505,7 +505,7 @@ def colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, *, k_v
 
 def _within_duty(t, r_safe):
     """1 for a neighbour within R_safe or one the own ship has a give-way duty to (beyond R_safe, within the
-    lookout ``cv_r_look``, only such a ship counts)."""
+    lookout ``cv_r_look``, only such a ship counts; :func:`_field` returns the active ones as ``t["counted"]``)."""
     return ((t["d"] < r_safe) + t["duty"]) > 0
 
 
@@ -531,6 +531,7 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
                              d_clear=d_clear, v_ship_min=v_ship_min, r_guard=r_guard, lam_guard=lam_guard,
                              d_risk=d_risk, code=code, reference=base)
     active = active * _within_duty(t, r_safe)
+    t = {**t, "counted": active}
     avoid = active * t["avoid"]
     d_threat = ca.mmin(avoid * t["d"] + (1 - avoid) * _BIG)
     d_eff = ca.fmax(dist_goal, ca.if_else(d_threat < _BIG / 2, ca.fmax(d_threat, d_att_floor), 0))
@@ -779,15 +780,16 @@ def colregs_vortex_command(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, acti
                                   if k not in ("lam_sink", "n_candidates", "walls", "clearance", "horizon")})
     link, code = recall(nb_pos, active, slots_of(memory))
     # beyond R_safe (within the lookout, cv_r_look) only a ship the own ship gives way to opens an encounter
-    reach = ((now["d"] < kw["r_safe"]) + (now["role_now"] > GIVE_WAY - 0.5)) > 0
+    giving_way = gives_way(now["role_now"])
+    reach = ((now["d"] < kw["r_safe"]) + giving_way) > 0
     opened = active * reach * now["risk"] * (code == 0)
     link, code = open_encounters(nb_pos, active * reach * now["risk"], now["role_now"], link, code)
     # a new give-way duty measures its alteration from the heading at its onset
-    base = ca.if_else(ca.sum2(opened * (now["role_now"] > GIVE_WAY - 0.5)) > 0, own_psi, base)
+    base = ca.if_else(ca.sum2(opened * giving_way) > 0, own_psi, base)
     vec, factor, t = _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, code=code, course=course,
                             base=base, **kw)
     code_next = t["role"] + ACTING * t["acting"]
-    active = active * _within_duty(t, kw["r_safe"])
+    active = t["counted"]
     busy = ca.sum2(active * ((t["duty"] + t["act"]) > 0)) > 0
     holding = ca.sum2(active * t["holding"]) > 0
     out = remember(nb_pos, link, code_next, own_psi)
