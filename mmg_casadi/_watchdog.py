@@ -6,11 +6,15 @@ pid. A watchdog notices the parent's death within :data:`POLL` s: it is re-paren
 
 ``build PARENT BUILD_DIR SOURCE BUILT TARGET -- COMMAND...``
     Compile one library for :func:`mmg_casadi.compiled.compile_function`: create ``BUILD_DIR`` (a fresh folder in
-    the cache), write standard input to ``BUILD_DIR/SOURCE``, run ``COMMAND`` (the C compiler) in a process group
-    of its own, and on success flush ``BUILD_DIR/BUILT`` to disk and rename it atomically to ``TARGET``. On
-    SIGTERM, SIGINT or SIGHUP, or when the parent dies, the compiler's whole process group (``gcc`` and its
-    ``cc1``/``as``/``ld``) is killed; ``BUILD_DIR`` is removed in every case. The exit status is the compiler's,
-    or ``128 + signal`` when stopped.
+    the cache, mode 0700), write standard input to ``BUILD_DIR/SOURCE``, run ``COMMAND`` (the C compiler) in
+    ``BUILD_DIR`` in a process group of its own, and on success flush ``BUILD_DIR/BUILT`` to disk, write its
+    SHA-256 to ``TARGET.sha256`` and rename the library atomically to ``TARGET``. On SIGTERM, SIGINT or SIGHUP,
+    or when the parent dies, the compiler's whole process group (``gcc`` and its ``cc1``/``as``/``ld``) is
+    killed, and any process of the compiler that left it; ``BUILD_DIR`` is removed in every case. The exit
+    status is the compiler's, or ``128 + signal`` when stopped. The caller starts this watchdog in a process
+    group of its own, so that a SIGKILL of the caller's group leaves it alive to do this; on Linux it is a child
+    subreaper (``prctl(PR_SET_CHILD_SUBREAPER)``: a compiler process whose parent died becomes its child) and the
+    compiler gets SIGKILL if the watchdog itself dies (``prctl(PR_SET_PDEATHSIG)``).
 ``reap DRIVER ROOT...``
     Guard a local Ray cluster started by ``DRIVER``: every :data:`REAP_POLL` s record the processes ``ROOT...`` (the
     children ``ray.init`` started) and all their descendants (Linux ``/proc``); when ``DRIVER`` dies, or when it
@@ -22,6 +26,8 @@ pid. A watchdog notices the parent's death within :data:`POLL` s: it is re-paren
 
 from __future__ import annotations
 
+import ctypes
+import hashlib
 import os
 import select
 import shutil
@@ -39,6 +45,25 @@ REAP_GIVE_UP = 10.0
 """Seconds after which ``reap`` mode stops killing (a process stuck in the kernel ignores even SIGKILL)."""
 STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT, signal.SIGHUP)
 """Signals that stop a ``build`` watchdog and its compiler (a ``reap`` watchdog ignores them)."""
+PR_SET_PDEATHSIG = 1
+"""``prctl`` option: signal delivered to a process when its parent dies (``<linux/prctl.h>``)."""
+PR_SET_CHILD_SUBREAPER = 36
+"""``prctl`` option: orphaned descendants of a process become its children (``<linux/prctl.h>``)."""
+
+
+def _prctl(option: int, value: int) -> bool:
+    """``prctl(option, value)`` through libc (Linux); False where it is not available or fails."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        return ctypes.CDLL(None, use_errno=True).prctl(option, value, 0, 0, 0) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def _die_with_parent() -> None:
+    """``preexec_fn`` of the compiler: SIGKILL when the watchdog dies (nothing else runs after a fork here)."""
+    _prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
 def process_stat(pid: int) -> tuple[str, int, int] | None:
@@ -118,14 +143,16 @@ def build(parent: int, build_dir: Path, source: str, built: str, target: Path, c
 
     for s in STOP_SIGNALS:
         signal.signal(s, on_signal)
+    _prctl(PR_SET_CHILD_SUBREAPER, 1)
     try:
         if _parent_gone(parent):
             return 128 + signal.SIGTERM
-        build_dir.mkdir()
+        build_dir.mkdir(mode=0o700)
         (build_dir / source).write_bytes(sys.stdin.buffer.read())
         if stopped or _parent_gone(parent):
             return 128 + (stopped[0] if stopped else signal.SIGTERM)
-        compiler = subprocess.Popen(command, stdin=subprocess.DEVNULL, process_group=0)
+        compiler = subprocess.Popen(command, stdin=subprocess.DEVNULL, cwd=build_dir, process_group=0,
+                                    preexec_fn=_die_with_parent)
         while True:
             try:
                 status = compiler.wait(POLL)
@@ -143,10 +170,45 @@ def build(parent: int, build_dir: Path, source: str, built: str, target: Path, c
                 os.fsync(fd)  # the data is on disk before the name is: a crash never leaves a short library
             finally:
                 os.close(fd)
+            _write_record(build_dir / built, Path(str(target) + ".sha256"))
             os.replace(build_dir / built, target)
         return status
     finally:
+        _kill_descendants()
         shutil.rmtree(build_dir, ignore_errors=True)
+
+
+def _write_record(library: Path, record: Path) -> None:
+    """Write the SHA-256 of ``library`` to ``record`` atomically (temporary name in the same folder, rename)."""
+    h = hashlib.sha256()
+    with open(library, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    tmp = library.with_name(record.name + ".tmp")
+    tmp.write_text(h.hexdigest() + "\n", encoding="ascii")
+    os.replace(tmp, record)
+
+
+def _kill_descendants() -> None:
+    """Kill whatever this watchdog's compiler left behind (its children re-parented to this subreaper)."""
+    if not Path("/proc/self/stat").exists():
+        return
+    for _ in range(50):
+        left = [p for p in descendants(children_by_parent().get(os.getpid(), [])) if p != os.getpid()]
+        if not left:
+            return
+        for pid in left:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except OSError:
+                pass
+        while True:  # reap them (they are our children, as subreaper)
+            try:
+                if os.waitpid(-1, os.WNOHANG)[0] == 0:
+                    break
+            except ChildProcessError:
+                break
+        time.sleep(0.01)
 
 
 def reap(driver: int, roots: list[int]) -> int:

@@ -3,15 +3,26 @@
 A Function is code-generated to C, the source hashed (SHA-256 of the C text and the compiler flags), and
 compiled with the system C compiler to ``<cache>/<name>_<hash>.so``; later calls (in this or any other process,
 e.g. a worker of the Monte Carlo pool) load that library with ``casadi.external`` instead of recompiling.
-The cache directory is ``$MMG_CASADI_CACHE`` or ``~/.cache/mmg-casadi``.
+The cache directory is ``$MMG_CASADI_CACHE`` or ``~/.cache/mmg-casadi``, created private to the user (mode 0700);
+a cache directory, or a library in it, that another user owns or that others may write to is refused
+(:class:`CacheError`), since loading a library runs its code.
+
+Every library this module builds has a record ``<name>_<hash>.so.sha256`` (the SHA-256 of the library's bytes,
+written before the library is renamed into place); a cached library is loaded only if it is complete
+(:func:`library_is_complete`) and matches its record (:func:`library_is_trusted`), else it is rebuilt (a library
+without a record, or that differs from it, is never loaded; a mismatch is reported with a warning).
 
 The compiler never outlives the process that started it: it runs under a small watchdog process
-(``mmg_casadi/_watchdog.py``, mode ``build``) in a process group of its own, and the watchdog kills that group
-(``gcc`` with its ``cc1``, ``as``, ``ld``) when the compiling process is interrupted (Ctrl-C, SIGTERM, SIGHUP) or
-dies, also by SIGKILL. The build happens in a folder ``<cache>/.build-<pid>-<random>@<host>`` that the watchdog
-removes in every case (a folder left by a process that is gone, e.g. after a power cut, is removed by the next
-compile on that host); the library is flushed to disk and renamed into place atomically, and a cached library is
-checked to be complete (:func:`library_is_complete`) before it is loaded, else rebuilt.
+(``mmg_casadi/_watchdog.py``, mode ``build``) that sits in a process group of its own, outside the study's, so
+that a signal to the study's whole group (``kill -KILL -- -PGID``, what ``kill -9 %1`` does in a shell) leaves it
+alive to clean up. The watchdog kills the compiler (``gcc`` with its ``cc1``, ``as``, ``ld``, in one process group
+of their own) when the compiling process is interrupted (Ctrl-C, SIGTERM, SIGHUP: the compiling process tells it)
+or dies, also by SIGKILL (the watchdog sees itself re-parented within 0.05 s). ``gcc`` is tied to the watchdog by
+``prctl(PR_SET_PDEATHSIG, SIGKILL)`` and the watchdog is a child subreaper, so a compiler process whose parent
+died is still found and killed. The build happens in a folder ``<cache>/.build-<pid>-<random>@<host>`` that the
+watchdog removes in every case; a folder left by a process that is gone (e.g. after a power cut, or a SIGKILL of
+the watchdog itself) is removed the first time a process of this host uses the cache. The library is flushed to
+disk and renamed into place atomically.
 """
 
 from __future__ import annotations
@@ -30,6 +41,8 @@ from pathlib import Path
 
 import casadi as ca
 
+from mmg_casadi.errors import InputError
+
 DEFAULT_FLAGS = ("-O2", "-fno-math-errno", "-fPIC", "-shared")
 """C compiler flags. ``-fno-math-errno`` lets ``sqrt`` compile to one instruction (errno is never read; the
 values are the same); no ``-ffast-math`` / ``-march=native``, which change results in the last bits."""
@@ -39,18 +52,60 @@ WATCHDOG = Path(__file__).with_name("_watchdog.py")
 """The watchdog script the compiler runs under."""
 STOP_TIMEOUT = 10.0
 """Seconds to wait for the watchdog to stop the compiler and remove the build folder after an interruption."""
+RECORD_SUFFIX = ".sha256"
+"""Suffix of a library's hash record (``<library>.so.sha256``: the hexadecimal SHA-256 of the library)."""
+
+_SWEPT: set[Path] = set()
+"""Cache directories whose stale build folders this process has removed (once per process)."""
+_TRUSTED: dict[Path, tuple] = {}
+"""Libraries this process has checked against their records, with the (device, inode, size, mtime) checked."""
+
+
+class CacheError(InputError):
+    """The compile cache (``$MMG_CASADI_CACHE``) is not private to the user, so its libraries cannot be trusted.
+
+    Parameters
+    ----------
+    field, allowed, got
+        As for :class:`~mmg_casadi.errors.InputError`.
+    """
 
 
 def cache_dir() -> Path:
-    """Directory holding compiled libraries (created on demand).
+    """Directory holding compiled libraries (created on demand, private to the user: mode 0700).
+
+    An existing directory of the user that others may read or enter is made private (``chmod 700``); one that
+    another user owns, or a symbolic link, is refused. The first call of a process removes the build folders
+    that processes of this host left behind (module notes).
 
     Returns
     -------
     pathlib.Path
         ``$MMG_CASADI_CACHE`` if set, else ``~/.cache/mmg-casadi``.
+
+    Raises
+    ------
+    CacheError
+        The directory is owned by another user, is a symbolic link, or cannot be created.
     """
     d = Path(os.environ.get("MMG_CASADI_CACHE", Path.home() / ".cache" / "mmg-casadi"))
-    d.mkdir(parents=True, exist_ok=True)
+    try:
+        d.parent.mkdir(parents=True, exist_ok=True)
+        d.mkdir(mode=0o700, exist_ok=True)
+        st = os.lstat(d)
+    except OSError as err:
+        raise CacheError("MMG_CASADI_CACHE", f"a directory that can be created ({err.strerror or err})",
+                         str(d)) from None
+    if not os.path.isdir(d) or os.path.islink(d):
+        raise CacheError("MMG_CASADI_CACHE", "a directory (not a symbolic link or a file)", str(d))
+    if hasattr(os, "getuid") and st.st_uid != os.getuid():
+        raise CacheError("MMG_CASADI_CACHE", f"a directory owned by you (uid {os.getuid()}), since its libraries "
+                         f"are loaded as code; this one belongs to uid {st.st_uid}", str(d))
+    if st.st_mode & 0o077:
+        os.chmod(d, 0o700)
+    if d not in _SWEPT:
+        _SWEPT.add(d)
+        _remove_stale_builds(d)
     return d
 
 
@@ -140,23 +195,87 @@ def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
     10.0
     """
     so, src = library_path(f, flags, also)
-    if so.exists() and not library_is_complete(so):
-        so.unlink(missing_ok=True)  # e.g. cut short by a crash of an older version: loading it could crash
-    if not so.exists():
+    if not library_is_trusted(so):
         _build(f.name(), src, so, flags)
+        if not library_is_trusted(so):
+            raise RuntimeError(f"the library {so} just built does not match its record {so}{RECORD_SUFFIX} "
+                               "(another process replaced it?)")
     if also:
         return [ca.external(g.name(), str(so)) for g in (f, *also)]
     return ca.external(f.name(), str(so))
 
 
+def library_is_trusted(path) -> bool:
+    """Whether the cached library at ``path`` may be loaded: it is complete (:func:`library_is_complete`), owned
+    by this user and writable by nobody else, and its bytes match its record ``path + ".sha256"`` (written when
+    :func:`compile_function` built it). A library that differs from its record is reported with a
+    ``RuntimeWarning`` (it was modified, or replaced, after it was built) and its record removed.
+
+    A library checked once by this process is not hashed again while its size and time stamps are unchanged.
+
+    Parameters
+    ----------
+    path : str or Path
+        The library file.
+
+    Returns
+    -------
+    bool
+        False for a missing, incomplete, foreign or unrecorded library, or one that does not match its record.
+
+    Examples
+    --------
+    >>> x = ca.SX.sym("x")
+    >>> so, _ = library_path(ca.Function("square_plus_two", [x], [x**2 + 2]))
+    >>> _ = compile_function(ca.Function("square_plus_two", [x], [x**2 + 2]))
+    >>> library_is_trusted(so), Path(str(so) + RECORD_SUFFIX).read_text().strip() == _sha256(so)
+    (True, True)
+    """
+    path = Path(path)
+    record = Path(str(path) + RECORD_SUFFIX)
+    try:
+        st, sr = os.stat(path), os.stat(record)  # no record: e.g. built by an older version, rebuilt once
+    except OSError:
+        return False
+    stamp = tuple((s.st_dev, s.st_ino, s.st_size, s.st_mtime_ns, s.st_ctime_ns) for s in (st, sr))
+    if _TRUSTED.get(path) == stamp:
+        return True
+    if any((hasattr(os, "getuid") and s.st_uid != os.getuid()) or s.st_mode & 0o022 for s in (st, sr)):
+        return False
+    if not library_is_complete(path):
+        return False
+    try:
+        expected = record.read_text(encoding="ascii").strip()
+    except (OSError, UnicodeDecodeError):
+        return False
+    if _sha256(path) != expected:
+        import warnings
+        warnings.warn(f"the compiled library {path} does not match the hash recorded when it was built; it is not "
+                      "loaded but rebuilt", RuntimeWarning, stacklevel=2)
+        record.unlink(missing_ok=True)
+        return False
+    _TRUSTED[path] = stamp
+    return True
+
+
+def _sha256(path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
 def _build(name: str, src: str, so: Path, flags) -> None:
     """Compile ``src`` to ``so`` under the watchdog (module notes); on an interruption stop it, then re-raise."""
-    _remove_stale_builds(so.parent)
     build = so.parent / f"{BUILD_PREFIX}{os.getpid()}-{secrets.token_hex(4)}@{socket.gethostname()}"
     c_file, out = f"{name}.c", so.name
+    # relative names, run in the build folder: the library's bytes do not depend on the folder's random name
     cmd = [sys.executable, "-I", "-S", str(WATCHDOG), "build", str(os.getpid()), str(build), c_file, out, str(so),
-           "--", _compiler(), *flags, str(build / c_file), "-o", str(build / out), "-lm"]
-    guard = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+           "--", _compiler(), *flags, c_file, "-o", out, "-lm"]
+    # a process group of its own: a signal to the study's group (kill -9 %1) must leave it alive to clean up
+    guard = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                             process_group=0)
     try:
         _out, err = guard.communicate(src.encode())
     except BaseException:  # Ctrl-C, SIGTERM (raised by signals.terminate_as_interrupt), ...
