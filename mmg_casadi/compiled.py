@@ -197,12 +197,34 @@ def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
     so, src = library_path(f, flags, also)
     if not library_is_trusted(so):
         _build(f.name(), src, so, flags)
-        if not library_is_trusted(so):
-            raise RuntimeError(f"the library {so} just built does not match its record {so}{RECORD_SUFFIX} "
-                               "(another process replaced it?)")
-    if also:
-        return [ca.external(g.name(), str(so)) for g in (f, *also)]
-    return ca.external(f.name(), str(so))
+    compiled = load_library(so, [g.name() for g in (f, *also)])
+    return compiled if also else compiled[0]
+
+
+def load_library(so, names) -> list:
+    """The Functions ``names`` of the cached library ``so``, which must be trusted (:func:`library_is_trusted`).
+
+    Parameters
+    ----------
+    so : str or Path
+        The library (e.g. from :func:`library_path`).
+    names : sequence of str
+        Names of the Functions to load from it.
+
+    Returns
+    -------
+    list of casadi.Function
+        One ``casadi.external`` per name.
+
+    Raises
+    ------
+    RuntimeError
+        The library is missing, incomplete, foreign or does not match its record.
+    """
+    if not library_is_trusted(so):
+        raise RuntimeError(f"the library {so} is missing or does not match its record {so}{RECORD_SUFFIX} "
+                           "(another process replaced it?)")
+    return [ca.external(n, str(so)) for n in names]
 
 
 def library_is_trusted(path) -> bool:

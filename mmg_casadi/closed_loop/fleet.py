@@ -32,7 +32,6 @@ import functools
 
 import casadi as ca
 import numpy as np
-from scipy.spatial import cKDTree
 
 from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, SHIP_PARAMS, Layout
 from mmg_casadi.closed_loop.step import _ROW, ENVELOPE, NAUX, _models, _ship_update, meet, ship_kinematics
@@ -103,6 +102,7 @@ def neighbour_lists(layout: Layout, x: np.ndarray, p: np.ndarray, radius: float)
         obs = np.asarray(p, float)[layout.param_block("obstacles")].reshape(S, 3)
         pts = np.vstack([pts, obs[:, 0:2]])
     n_agents = len(pts)
+    from scipy.spatial import cKDTree  # about 0.2 s to import: only for fleet layouts
     _, idx = cKDTree(pts).query(pts[:N], k=min(K + 2, n_agents), distance_upper_bound=radius)
     idx = np.asarray(idx).reshape(N, -1)
     idx = np.where(idx == np.arange(N)[:, None], n_agents, idx)  # drop the ship itself (pad = N + S)

@@ -14,7 +14,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.compiled import compile_function
+from mmg_casadi.compiled import compile_function, library_is_trusted, library_path, load_library
 from mmg_casadi.closed_loop.fleet import build_fleet_step, candidate_radius, neighbour_lists
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.errors import InputError
@@ -42,11 +42,52 @@ def rollout_functions(layout: Layout) -> list[ca.Function]:
     return [build_closed_loop_step(layout, sparse=sparse), build_guidance(layout, sparse=sparse)]
 
 
-@lru_cache(maxsize=64)
+_LIBRARIES: dict[Layout, tuple[ca.Function, ...]] = {}
+"""Compiled Functions loaded by this process, by layout (the most recent :data:`MAX_LOADED`)."""
+MAX_LOADED = 64
+"""Layouts whose compiled Functions this process keeps loaded."""
+
+
+def _keep(layout: Layout, compiled) -> tuple[ca.Function, ...]:
+    _LIBRARIES[layout] = tuple(compiled)
+    while len(_LIBRARIES) > MAX_LOADED:
+        del _LIBRARIES[next(iter(_LIBRARIES))]
+    return _LIBRARIES[layout]
+
+
 def _library(layout: Layout) -> tuple[ca.Function, ...]:
+    if layout in _LIBRARIES:
+        return _LIBRARIES[layout]
     step, *also = rollout_functions(layout)
     compiled = compile_function(step, also=also)
-    return tuple(compiled) if also else (compiled,)
+    return _keep(layout, compiled if also else [compiled])
+
+
+def load_if_cached(layout: Layout) -> bool:
+    """Load the compiled library of ``layout`` if the disk cache holds it (trusted), and say whether it did.
+
+    The Functions are built and their C source generated once for both the test and the loading (a study's
+    start tests every layout it needs before compiling the missing ones, :func:`~mmg_casadi.montecarlo.batching
+    .prepare_layouts`).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout.
+
+    Returns
+    -------
+    bool
+        True if the library is loaded (now or before), False if it must be compiled.
+    """
+    if layout in _LIBRARIES:
+        return True
+    step, *also = rollout_functions(layout)
+    so, _src = library_path(step, also=also)
+    if not library_is_trusted(so):
+        return False
+    _keep(layout, load_library(so, [f.name() for f in (step, *also)]))
+    return True
 
 
 def compiled_step(layout: Layout) -> ca.Function:
@@ -103,13 +144,29 @@ def _chunk(layout: Layout, chunk: int, batch: int) -> ca.Function:
 
 
 @lru_cache(maxsize=64)
+def _scenario_chunk(layout: Layout, chunk: int, every: int) -> ca.Function:
+    """``chunk`` steps of one scenario returning its final state and, every ``every`` steps, the time and the
+    :data:`HISTORY_STATE` rows of every ship (``(1 + 4 N, chunk // every)``); ``every = 0``: the final state only.
+
+    A batch maps this over its scenarios (:func:`_chunk_final`, :func:`_chunk_history`): one scenario's ``chunk``
+    steps after the other's, so the work memory holds one scenario's steps, not the batch's (the steps and their
+    arithmetic are those of ``compiled_step(layout).map(batch).mapaccum(chunk)``, the results the same to the bit).
+    """
+    F = compiled_step(layout).mapaccum(chunk)
+    x = ca.MX.sym("x", layout.nx)
+    p = ca.MX.sym("p", layout.np)
+    X, _ = F(x, p)
+    outputs = [X[:, -1]]
+    if every:
+        rows = [0] + [layout.row(name, i) for i in range(layout.n_ships) for name in HISTORY_STATE]
+        outputs.append(X[rows, list(range(every - 1, chunk, every))])
+    return ca.Function(f"chunk_one_{layout.key()}_{chunk}_{every}", [x, p], outputs)
+
+
 def _chunk_final(layout: Layout, chunk: int, batch: int) -> ca.Function:
     """``chunk`` steps of a batch returning only the final states (no history copied out of compiled code)."""
-    F = _chunk(layout, chunk, batch)
-    x = ca.MX.sym("x", layout.nx, batch)
-    p = ca.MX.sym("p", layout.np, batch)
-    X, _ = F(x, p)
-    return ca.Function(f"chunk_final_{layout.key()}_{chunk}_{batch}", [x, p], [X[:, -batch:]])
+    f = _scenario_chunk(layout, chunk, 0)
+    return f.map(batch) if batch > 1 else f
 
 
 class _Bound:
@@ -134,7 +191,7 @@ class _Bound:
         return [r.reshape(shape, order="F").copy() for r, shape in zip(self.res, self.shapes)]
 
 
-@lru_cache(maxsize=64)
+@lru_cache(maxsize=256)
 def _bound(kind: str, layout: Layout, chunk: int, batch: int, every: int = 1) -> _Bound:
     f = _chunk_final(layout, chunk, batch) if kind == "final" else _chunk_history(layout, chunk, batch, every)
     return _Bound(f)
@@ -144,18 +201,11 @@ HISTORY_STATE: tuple[str, ...] = ("x", "y", "psi", "status")
 """Ship state variables kept by :func:`simulate_batch_history`."""
 
 
-@lru_cache(maxsize=64)
 def _chunk_history(layout: Layout, chunk: int, batch: int, every: int) -> ca.Function:
     """``chunk`` steps of a batch returning the final states and, every ``every`` steps, the time and the
-    :data:`HISTORY_STATE` rows of every ship (``(1 + 4 N, (chunk // every) * batch)``, step-major blocks)."""
-    F = _chunk(layout, chunk, batch)
-    x = ca.MX.sym("x", layout.nx, batch)
-    p = ca.MX.sym("p", layout.np, batch)
-    X, _ = F(x, p)
-    rows = [0] + [layout.row(name, i) for i in range(layout.n_ships) for name in HISTORY_STATE]
-    cols = [k * batch + j for k in range(every - 1, chunk, every) for j in range(batch)]
-    return ca.Function(f"chunk_hist_{layout.key()}_{chunk}_{batch}_{every}", [x, p],
-                       [X[:, -batch:], X[rows, cols]])
+    :data:`HISTORY_STATE` rows of every ship (``(1 + 4 N, batch * (chunk // every))``, scenario-major blocks)."""
+    f = _scenario_chunk(layout, chunk, every)
+    return f.map(batch) if batch > 1 else f
 
 
 def _finished(layout: Layout, x: np.ndarray, t_max) -> np.ndarray:
@@ -517,10 +567,10 @@ def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chu
 
     def call(x, p, active):
         xf, H = _bound("history", layout, chunk, len(active), every)(x, p)
-        H = H.reshape(len(rows), chunk // every, len(active))
+        H = H.reshape(len(rows), len(active), chunk // every)  # scenario-major blocks of chunk // every columns
         for k, j in enumerate(active):
             if j >= 0:
-                hist[j].append(H[:, :, k].T)
+                hist[j].append(H[:, k, :].T)
         return np.array(xf)
 
     out, busy = _stream(layout, X0, P, width, call)

@@ -21,8 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mmg_casadi.compiled import library_is_trusted, library_path
-from mmg_casadi.closed_loop.simulation import compiled_step, rollout_functions
+from mmg_casadi.closed_loop.simulation import compiled_step, load_if_cached
 from mmg_casadi.errors import InputError, RunError
 from mmg_casadi.limits import MAX_WORKERS_PER_CORE, max_workers
 from mmg_casadi.montecarlo.disturbance_sampling import DisturbanceRanges
@@ -166,8 +165,7 @@ def prepare_layouts(layouts, workers: int = 1, *, log=None) -> None:
     layouts = list(dict.fromkeys(layouts))
     missing = []
     for lay in layouts:
-        step, guidance = rollout_functions(lay)
-        if not library_is_trusted(library_path(step, also=[guidance])[0]):
+        if not load_if_cached(lay):  # loaded when cached: its Functions are built and generated once
             missing.append(lay)
     if missing:
         missing.sort(key=_compile_cost, reverse=True)

@@ -17,7 +17,6 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-import pandas as pd
 
 from mmg_casadi.closed_loop.outcome import RUN_FAILURES
 from mmg_casadi.errors import InputError
@@ -506,6 +505,7 @@ class Summary:
         pandas.DataFrame
             One row per (environment, method), the columns of :data:`SUMMARY_COLUMNS`.
         """
+        import pandas as pd  # about 0.3 s to import: only for to_pandas
         return pd.DataFrame(self.rows, columns=list(SUMMARY_COLUMNS))
 
 

@@ -21,7 +21,6 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy.stats import binomtest
 
 from mmg_casadi.errors import InputError
 
@@ -50,6 +49,7 @@ def wilson(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
     >>> [round(v, 4) for v in wilson(95, 100)]
     [0.8882, 0.9785]
     """
+    from scipy.stats import binomtest  # about 0.5 s to import: only when a summary is made
     ci = binomtest(int(k), int(n)).proportion_ci(confidence_level=confidence, method="wilson")
     return float(ci.low), float(ci.high)
 
@@ -165,5 +165,6 @@ def paired_comparison(success_a, success_b, confidence: float = 0.95) -> PairedC
     lo = d - math.sqrt(max((pa - la) ** 2 - 2 * phi * (pa - la) * (ub - pb) + (ub - pb) ** 2, 0.0))
     hi = d + math.sqrt(max((ua - pa) ** 2 - 2 * phi * (ua - pa) * (pb - lb) + (pb - lb) ** 2, 0.0))
     discordant = n10 + n01
+    from scipy.stats import binomtest
     p = float(binomtest(n10, discordant, 0.5).pvalue) if discordant else 1.0
     return PairedComparison(n, pa, pb, n11, n10, n01, n00, d, (max(lo, -1.0), min(hi, 1.0)), p, confidence)

@@ -49,8 +49,6 @@ from importlib import resources
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
-from scipy.spatial import cKDTree
 
 from mmg_casadi.closed_loop.outcome import ship_outcomes
 from mmg_casadi.closed_loop.problem import build_problem
@@ -131,6 +129,7 @@ class ScenarioResult:
             The entries of ``metrics["ships"]`` except ``stalled_at``, indexed by ship name.
         """
         rows = [{k: v for k, v in s.items() if k != "stalled_at"} for s in self.metrics["ships"]]
+        import pandas as pd  # about 0.3 s to import: only for to_pandas
         return pd.DataFrame(rows).set_index("name")
 
     def to_frame(self):
@@ -515,6 +514,7 @@ def _pairs(sc, traj: Trajectory, mask: np.ndarray, r_safe: float) -> tuple[list,
             continue
         pts = np.column_stack([traj.states[k, sailing, traj.layout.column("x")],
                                traj.states[k, sailing, traj.layout.column("y")]])
+        from scipy.spatial import cKDTree  # about 0.2 s to import: only where it is used
         tree = cKDTree(pts)
         ships |= {(int(sailing[a]), int(sailing[b])) for a, b in tree.query_pairs(r_safe)}
         if S:
