@@ -20,7 +20,7 @@ if ((getattr(_sys, "argv", None) or [""])[0].endswith("mmg-casadi")
         or ("-m", "mmg_casadi.cli") in zip(_orig_argv, _orig_argv[1:])):
     # the command line program: a signal that arrives while the package loads (seconds) is acted on by its main()
     from mmg_casadi.signals import defer_startup_signals as _defer
-    _defer()
+    _defer(program=True)
 
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.closed_loop.problem import ClosedLoopModel, Problem, build_problem

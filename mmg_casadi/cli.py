@@ -23,7 +23,7 @@ from pathlib import Path
 
 from mmg_casadi.errors import InputError, RunError
 from mmg_casadi.guidance import methods as registry
-from mmg_casadi.io import check_output, write_json, write_text
+from mmg_casadi.io import StagedFiles, check_output, write_json, write_text
 from mmg_casadi.limits import MAX_SHIPS, check_runs, check_steps
 from mmg_casadi.montecarlo.disturbance_sampling import parse_range
 from mmg_casadi.montecarlo.sampling import parse_envs, sample_traffic
@@ -35,7 +35,8 @@ from mmg_casadi.scenarios.interchange import convert_file
 from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
 from mmg_casadi.scenarios.run import packaged_names, packaged_scenario, packaged_scenarios, run_scenario
 from mmg_casadi.scenarios.scenario import dump_scenario, load_scenario, scenario_from_dict, with_method
-from mmg_casadi.signals import end_deferred_signals, exit_status, signal_name, terminate_as_interrupt
+from mmg_casadi.signals import (CLI_SIGNALS, end_deferred_signals, exit_status, is_program, settle, signal_name,
+                                terminate_as_interrupt)
 from mmg_casadi.vessel.library import load_vessel, vessel_table
 from mmg_casadi.vessel.maneuvers import speed_change, turning_circle, validate_maneuver_args, zigzag
 
@@ -348,9 +349,9 @@ def _maneuver(a) -> dict:
         name = f"zigzag_{a.angle:g}" + ("_port" if a.port else "")
     if a.vessel != "kcs":
         r.metrics["vessel"] = v.name
-    a.out.mkdir(parents=True, exist_ok=True)
-    plot_maneuver(r, a.out / f"{name}.png")
-    write_json(a.out / "metrics.json", r.metrics)
+    with StagedFiles() as st:  # the figure and metrics.json: both or neither, each complete
+        plot_maneuver(r, st.path(a.out / f"{name}.png"))
+        write_json(st.path(a.out / "metrics.json"), r.metrics)
     print(json.dumps({k: v for k, v in r.metrics.items() if not isinstance(v, dict)}, indent=1))
     return r.metrics
 
@@ -565,42 +566,62 @@ def main(argv=None) -> int:
     int
         0 on success, 2 for invalid input, 1 for a run error, and the signal's status after an interruption.
     """
+    seen: dict = {}  # the parsed arguments, for the line of an interruption
+    # SIGINT, SIGTERM, SIGHUP: the first raises (one line, 128 + signal), any more are ignored; in the program
+    # they stay ignored while it exits (a late Ctrl-C must not print a traceback from the interpreter's exit)
+    with terminate_as_interrupt(CLI_SIGNALS, ignore_on_exit=is_program()):
+        try:
+            return _main(argv, seen)
+        except KeyboardInterrupt as e:  # a signal that came while the outcome was being reported: its line only
+            return _interrupted(e, seen.get("a"))
+
+
+def _interrupted(e: BaseException, a) -> int:
+    what = ("finished results are kept; rerun the same command to resume" if _resumable(a) else
+            "this command does not resume: rerun it to start again")
+    print(f"mmg-casadi: interrupted by {signal_name(e)} ({what})", file=sys.stderr)
+    return exit_status(e)
+
+
+def _main(argv, seen: dict) -> int:
     parser = build_parser()
     a = None
     try:
-        with terminate_as_interrupt():
-            a, extra = parser.parse_known_args(argv)
-            end_deferred_signals()  # a signal received while the package loaded (mmg_casadi/__init__.py)
-            if extra:
-                prog = "mmg-casadi " + " ".join(x for x in (a.command, getattr(a, "study", None),
-                                                             getattr(a, "what", None)) if x)
-                raise InputError(extra[0], f"an option of '{prog}' (see '{prog} --help')")
-            _check_out(a)
-            handlers = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
-                        "convert": _convert, "traffic": _traffic, "generate": _generate, "replay": _replay,
-                        "params": _params,
-                        "scenarios": _scenarios, "vessels": _vessels, "identify": _identify}
-            handlers[a.command](a)
-            if getattr(a, "check_determinism", False):
-                return _check_determinism(a, handlers[a.command])
+        a, extra = parser.parse_known_args(argv)
+        seen["a"] = a
+        end_deferred_signals()  # a signal received while the package loaded (mmg_casadi/__init__.py)
+        if extra:
+            prog = "mmg-casadi " + " ".join(x for x in (a.command, getattr(a, "study", None),
+                                                         getattr(a, "what", None)) if x)
+            raise InputError(extra[0], f"an option of '{prog}' (see '{prog} --help')")
+        _check_out(a)
+        handlers = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
+                    "convert": _convert, "traffic": _traffic, "generate": _generate, "replay": _replay,
+                    "params": _params,
+                    "scenarios": _scenarios, "vessels": _vessels, "identify": _identify}
+        handlers[a.command](a)
+        if getattr(a, "check_determinism", False):
+            status = _check_determinism(a, handlers[a.command])
+            settle()
+            return status
+        settle()
     except _CliError as e:
+        settle()
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
         return 2
     except InputError as e:
+        settle()
         if a is not None and not isinstance(e, _CliError):
             e = InputError(_flag(e.field, a), e.allowed, e.got)
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
         return 2
     except RunError as e:
+        settle()
         print(f"mmg-casadi: error: {e}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as e:
-        what = ("finished results are kept; rerun the same command to resume" if _resumable(a) else
-                "this command does not resume: rerun it to start again")
-        print(f"mmg-casadi: interrupted by {signal_name(e)} ({what})", file=sys.stderr)
-        return exit_status(e)
+        return _interrupted(e, a)
     return 0
-
 
 if __name__ == "__main__":
     sys.exit(main())

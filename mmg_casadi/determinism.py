@@ -4,7 +4,9 @@
 command a second time into a temporary folder and compare what the two runs wrote with :func:`compare_outputs`:
 every ``.csv``, ``.json`` and ``.toml`` file (byte for byte, as text, after leaving out the timing columns and
 keys :data:`TIMING`) and every ``.npz`` file (array by array, bit for bit); figures (``.png``) and Markdown reports
-are not compared. The first difference is reported and the command exits with status 1; identical outputs exit 0.
+are not compared. A table of runs (a CSV file with the columns :data:`RUN_KEY`, e.g. a study's ``runs.csv``, whose
+rows are appended in the order the batches finish) is compared row by row matched on that key, not on the row
+order. The first difference is reported and the command exits with status 1; identical outputs exit 0.
 
 Examples
 --------
@@ -27,6 +29,8 @@ Monte Carlo (:data:`mmg_casadi.montecarlo.execution.TIMING_COLUMNS`, also in the
 ``<name>_ci_low``, ...), the wall-clock time of a run of ``study encounters`` and of a whole study."""
 COMPARED = (".csv", ".json", ".toml", ".npz")
 """File types compared; the others (figures, Markdown reports) are not."""
+RUN_KEY = ("environment", "method", "run")
+"""Columns that identify a row of a table of runs: such tables are compared row by row on this key."""
 
 
 def is_timing(name: str) -> bool:
@@ -121,6 +125,8 @@ def compare_file(a: Path, b: Path, name: str) -> str | None:
         (ha, ra), (hb, rb) = _csv_rows(ta), _csv_rows(tb)
         if ha != hb:
             return f"{name}: columns {ha} vs {hb}"
+        if set(RUN_KEY) <= set(ha):
+            return _keyed_difference(name, ha, ra, rb)
         for k, (x, y) in enumerate(zip(ra, rb)):
             for col, u, v in zip(ha, x, y):
                 if u != v:
@@ -132,6 +138,38 @@ def compare_file(a: Path, b: Path, name: str) -> str | None:
         return f"{name} line {k + 1}: {(la[k] if k < len(la) else '<end>')[:80]!r} vs " \
                f"{(lb[k] if k < len(lb) else '<end>')[:80]!r}"
     return None
+
+
+def _keyed_difference(name: str, header: list[str], ra: list[list[str]], rb: list[list[str]]) -> str | None:
+    """The first difference between two tables of runs matched on :data:`RUN_KEY` (the row order is free)."""
+    at = [header.index(c) for c in RUN_KEY]
+
+    def keyed(rows):
+        out = {}
+        for r in rows:
+            key = tuple(r[k] if k < len(r) else "" for k in at)
+            if key in out:
+                return None, key
+            out[key] = r
+        return out, None
+
+    (ka, dup_a), (kb, dup_b) = keyed(ra), keyed(rb)
+    if dup_a or dup_b:
+        which, key = ("first", dup_a) if dup_a else ("second", dup_b)
+        return f"{name}: run {dict(zip(RUN_KEY, key))} twice in the {which} run"
+    only = sorted(set(ka) ^ set(kb), key=_natural)
+    if only:
+        return f"{name}: run {dict(zip(RUN_KEY, only[0]))} only in the {'first' if only[0] in ka else 'second'} run"
+    for key in sorted(ka, key=_natural):
+        for col, u, v in zip(header, ka[key], kb[key]):
+            if u != v:
+                return f"{name} run {dict(zip(RUN_KEY, key))} column {col}: {u!r} vs {v!r}"
+    return None
+
+
+def _natural(key: tuple[str, ...]) -> tuple:
+    """Sort key of a run key: numbers as numbers."""
+    return tuple((0, int(k), "") if k.lstrip("-").isdigit() else (1, 0, k) for k in key)
 
 
 def compare_outputs(first, second) -> tuple[str | None, int]:

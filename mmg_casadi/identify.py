@@ -46,6 +46,7 @@ from scipy.interpolate import PchipInterpolator
 from scipy.stats import norm
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.io import StagedFiles, write_text
 from mmg_casadi.vessel.library import Vessel, data_path, load_vessel
 from mmg_casadi.vessel.mmg import mmg_rhs
 from mmg_casadi.vessel.ship import ShipParams, required_coefficients
@@ -495,14 +496,14 @@ def identify_to_dir(data: str | Path, vessel: str | Path, free, out: str | Path)
     runs = split_runs(read_timeseries(data))
     res = identify(runs, v, free)
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     toml_path = out / f"{v.name}_identified.toml"
-    toml_path.write_text(vessel_toml(vessel, res, Path(data).name), encoding="utf-8")
     rep = res.report()
     rep["vessel_file"] = str(toml_path)
     rep["summary"] = {n: f"{c['estimate']:.6g} ± {c['std_error']:.2g} (base {c['base']:g})"
                       for n, c in rep["coefficients"].items()} | {"status": res.status, "vessel_file": str(toml_path)}
-    (out / "identification.json").write_text(json.dumps(rep, indent=1), encoding="utf-8")
+    with StagedFiles() as st:  # both files or neither, each complete
+        write_text(st.path(toml_path), vessel_toml(vessel, res, Path(data).name))
+        write_text(st.path(out / "identification.json"), json.dumps(rep, indent=1))
     return rep
 
 

@@ -1,4 +1,13 @@
-"""Small file helpers shared by the runners and the CLI: JSON with numpy values and NaN as null, atomically.
+"""Small file helpers shared by the runners and the CLI: every output file is written atomically.
+
+A file is written under a temporary name in its own directory (:func:`atomic_path`: ``.<name>.tmp-<pid>-<random>``
+with the same suffix) and renamed into place when it is complete (``os.replace``), so an interruption (Ctrl-C,
+SIGTERM, a full disk) leaves either the old file or the complete new one, never a part; the temporary file is
+removed when the writing fails. :func:`write_text`, :func:`write_json`, :func:`atomic_open` and
+:func:`save_figure` do this for text, JSON, a file handle and a matplotlib figure; :class:`StagedFiles` writes a
+set of files (a study's final outputs) and renames them together at the end, with the termination signals held
+back for the renames. CSV cells that hold text go through :func:`csv_cell`, which keeps a spreadsheet from reading
+a name as a formula.
 
 Examples
 --------
@@ -14,7 +23,9 @@ import math
 import os
 import secrets
 import shutil
+import signal
 import tempfile
+import threading
 import tomllib
 from pathlib import Path
 
@@ -66,12 +77,242 @@ def write_json(path, obj) -> Path:
     pathlib.Path
         The path written.
     """
+    return write_text(path, json.dumps(json_safe(obj), indent=2))
+
+
+def _temporary_name(path: Path) -> Path:
+    """A fresh hidden name beside ``path`` with its suffix (``np.savez`` and ``savefig`` read the suffix)."""
+    return path.with_name(f".{path.stem}.tmp-{os.getpid()}-{secrets.token_hex(4)}{path.suffix}")
+
+
+@contextlib.contextmanager
+def atomic_path(path):
+    """Yield a temporary path beside ``path`` to write the file to; rename it to ``path`` when the block ends
+    normally, remove it when the block raises (an interruption included), so ``path`` is never partly written.
+
+    Parameters
+    ----------
+    path : str or Path
+        Destination; its directory is created.
+
+    Yields
+    ------
+    Path
+        The temporary path (same directory, hidden name, same suffix).
+
+    Examples
+    --------
+    >>> d = Path(tempfile.mkdtemp())
+    >>> with atomic_path(d / "a.txt") as tmp:
+    ...     _ = tmp.write_text("new")
+    >>> try:
+    ...     with atomic_path(d / "a.txt") as tmp:
+    ...         _ = tmp.write_text("half")
+    ...         raise KeyboardInterrupt
+    ... except KeyboardInterrupt:
+    ...     pass
+    >>> [p.name for p in d.iterdir()], (d / "a.txt").read_text()
+    (['a.txt'], 'new')
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(json_safe(obj), indent=2))
-    tmp.replace(path)
+    tmp = _temporary_name(path)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+
+
+@contextlib.contextmanager
+def atomic_open(path, mode: str = "w", **kwargs):
+    """``open`` a temporary file beside ``path`` (:func:`atomic_path`) and rename it to ``path`` when the block
+    ends normally.
+
+    Parameters
+    ----------
+    path : str or Path
+        Destination.
+    mode : str, default 'w'
+        A writing mode (``"w"``, ``"wb"``).
+    **kwargs
+        Passed to :func:`open` (e.g. ``encoding="utf-8", newline=""`` for a CSV file).
+
+    Yields
+    ------
+    file object
+        The open temporary file.
+    """
+    with atomic_path(path) as tmp:
+        with open(tmp, mode, **kwargs) as fh:
+            yield fh
+
+
+def save_figure(fig, path, **kwargs) -> Path:
+    """``fig.savefig(path, **kwargs)`` through a temporary file (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or Path
+        Destination; the format is its suffix.
+    **kwargs
+        Passed to ``savefig`` (e.g. ``dpi``).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, **kwargs)
     return path
+
+
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+"""First characters with which a spreadsheet reads a cell as a formula (OWASP "CSV injection")."""
+
+
+def csv_cell(text) -> str:
+    """A text cell for a CSV file that a spreadsheet shows as text: one starting like a formula
+    (:data:`FORMULA_START`) gets a leading apostrophe. Quoting (commas, quotes, newlines) is the ``csv`` module's.
+
+    Parameters
+    ----------
+    text : object
+        The cell's text (``str()`` is taken).
+
+    Returns
+    -------
+    str
+        The cell.
+
+    Examples
+    --------
+    >>> csv_cell("own ship"), csv_cell("=HYPERLINK(1)"), csv_cell("-x")
+    ('own ship', "'=HYPERLINK(1)", "'-x")
+    """
+    text = str(text)
+    return "'" + text if text.startswith(FORMULA_START) else text
+
+
+class StagedFiles:
+    """Write a set of files under temporary names and rename them all into place at the end (:meth:`commit`),
+    the last one given last; SIGINT, SIGTERM and SIGHUP are held back during the renames (recorded by a
+    handler of their own, then raised again with :func:`signal.raise_signal` for the handler they had), so an
+    interruption leaves every file of the set old or every file new, and one that arrives during the renames is
+    acted on after them. Before :meth:`commit` (or if the block raises) the temporary files are
+    removed and the old files left as they were.
+
+    Use as a context manager: ``with StagedFiles() as st: write to st.path(final)``; the block's normal end
+    commits.
+
+    Examples
+    --------
+    >>> d = Path(tempfile.mkdtemp())
+    >>> with StagedFiles() as st:
+    ...     _ = st.path(d / "a.txt").write_text("a")
+    ...     _ = st.path(d / "b.txt").write_text("b")
+    >>> sorted(p.name for p in d.iterdir())
+    ['a.txt', 'b.txt']
+    """
+
+    def __init__(self):
+        self._pending: list[tuple[Path, Path]] = []
+        self._remove: list[Path] = []
+
+    def path(self, final) -> Path:
+        """A temporary path to write ``final`` to (renamed to ``final`` by :meth:`commit`).
+
+        Parameters
+        ----------
+        final : str or Path
+            The file's final path (its directory is created).
+
+        Returns
+        -------
+        Path
+            The temporary path.
+        """
+        final = Path(final)
+        final.parent.mkdir(parents=True, exist_ok=True)
+        tmp = _temporary_name(final)
+        self._pending.append((tmp, final))
+        return tmp
+
+    def remove(self, path) -> None:
+        """Remove ``path`` at :meth:`commit` (after the renames), e.g. a file of an older set.
+
+        Parameters
+        ----------
+        path : str or Path
+            The file to remove.
+        """
+        self._remove.append(Path(path))
+
+    def commit(self) -> None:
+        """Rename every temporary file to its final name, in the order given, then remove the files
+        :meth:`remove` named; termination signals are held back meanwhile (in the main thread)."""
+        held = _hold_signals()
+        try:
+            for tmp, final in self._pending:
+                os.replace(tmp, final)
+            for p in self._remove:
+                with contextlib.suppress(FileNotFoundError):
+                    p.unlink()
+        finally:
+            self._pending, self._remove = [], []
+            _release_signals(held)
+
+    def discard(self) -> None:
+        """Remove the temporary files not committed."""
+        for tmp, _final in self._pending:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+        self._pending, self._remove = [], []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, *_exc):
+        if exc_type is None:
+            self.commit()
+        else:
+            self.discard()
+        return False
+
+
+_HELD = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+
+def _hold_signals():
+    """Record :data:`_HELD` signals instead of acting on them; returns what :func:`_release_signals` needs.
+
+    A Python handler always runs in the main thread (whichever thread the signal was delivered to), so this
+    holds them back whatever the other threads of the process (a pool's, a progress bar's) block."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    received: list[int] = []
+    previous = {}
+    for s in _HELD:
+        h = signal.getsignal(s)
+        if h is signal.SIG_IGN or h is None:  # ignored, or a handler not set from Python: left alone
+            continue
+        previous[s] = signal.signal(s, lambda signum, _frame: received.append(signum))
+    return previous, received
+
+
+def _release_signals(held) -> None:
+    if held is None:
+        return
+    previous, received = held
+    for s, h in previous.items():
+        signal.signal(s, h)
+    if received:
+        signal.raise_signal(received[0])  # acted on now, by the handler it had (it may raise)
 
 
 def read_toml(path, what: str, cls=InputError) -> dict:
@@ -128,10 +369,8 @@ def write_text(path, text: str) -> Path:
         The path written.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(path)
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
     return path
 
 
@@ -142,8 +381,8 @@ def check_output(path, *, kind: str = "dir", field: str = "--out") -> Path:
     Parameters
     ----------
     path : str or Path
-        The output directory (``kind="dir"``) or file (``kind="file"``; written atomically through
-        ``path + ".tmp"``, as :func:`write_text` does).
+        The output directory (``kind="dir"``) or file (``kind="file"``; written atomically through a
+        temporary name beside it, as :func:`write_text` does: the probe has a name of that length).
     kind : {"dir", "file"}
         What ``path`` names.
     field : str, default '--out'
@@ -185,10 +424,8 @@ def check_output(path, *, kind: str = "dir", field: str = "--out") -> Path:
                 raise InputError(field, "a directory (or a new path), not an existing file", str(path))
             directory = path
         else:
-            for p in (path, path.with_name(path.name + ".tmp")):
-                if p.is_dir():
-                    raise InputError(field, "a file name, not an existing directory" + (f" ({p})" if p != path else ""),
-                                     str(path))
+            if path.is_dir():
+                raise InputError(field, "a file name, not an existing directory", str(path))
             directory = path.parent
         missing = []
         d = directory
@@ -200,8 +437,12 @@ def check_output(path, *, kind: str = "dir", field: str = "--out") -> Path:
         for d in reversed(missing):
             d.mkdir()
             created.append(d)
-        fd, probe = tempfile.mkstemp(dir=directory, prefix=".mmg-casadi-probe-")
-        os.close(fd)
+        if kind == "file":
+            probe = _temporary_name(path)
+            os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        else:
+            fd, probe = tempfile.mkstemp(dir=directory, prefix=".mmg-casadi-probe-")
+            os.close(fd)
         os.unlink(probe)
     except InputError:
         raise

@@ -13,6 +13,8 @@ from matplotlib.colors import hsv_to_rgb
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
 
+from mmg_casadi.io import save_figure
+
 FIGURE_DPI = 150
 """Resolution of every saved figure (PNG, dots per inch): the figures of the studies, the tuning and the site."""
 
@@ -224,7 +226,7 @@ def plot_maneuver(result, path=None) -> Figure:
     for a in (a1, a2, a3):
         a.grid(True, alpha=0.3)
     if path:
-        fig.savefig(path, dpi=FIGURE_DPI)
+        save_figure(fig, path, dpi=FIGURE_DPI)
     return fig
 
 
@@ -338,7 +340,7 @@ def plot_scenario(result, path=None, *, title=None) -> Figure:
     a2.legend(fontsize=7)
     a2.grid(True, alpha=0.3)
     if path:
-        fig.savefig(path, dpi=FIGURE_DPI)
+        save_figure(fig, path, dpi=FIGURE_DPI)
     return fig
 
 
@@ -393,7 +395,7 @@ def plot_tracking(result, path=None) -> Figure:
     for a in (a1, a2, a3):
         a.grid(True, alpha=0.3)
     if path:
-        fig.savefig(path, dpi=FIGURE_DPI)
+        save_figure(fig, path, dpi=FIGURE_DPI)
     return fig
 
 
@@ -445,7 +447,7 @@ def plot_fleet(result, path=None, *, title=None, ax=None) -> Figure:
     n_goal = sum(s["reached_goal"] for s in ships)
     ax.set_title(title or f"{N} ships: {n_col} in a collision (×), {n_goal} reached their goals")
     if path is not None:
-        fig.savefig(path, dpi=FIGURE_DPI)
+        save_figure(fig, path, dpi=FIGURE_DPI)
     return fig
 
 

@@ -4,7 +4,11 @@
   and SIGHUP (the terminal went away) raise :class:`Terminated`, a :class:`KeyboardInterrupt`, in the main
   thread, so they take exactly the path of Ctrl-C: running batches are stopped, finished rows stay in
   ``runs.csv`` and the CLI prints one line saying how to resume. :func:`exit_status` gives the conventional
-  status ``128 + signal`` (130 for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP).
+  status ``128 + signal`` (130 for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP). The CLI handles SIGINT the same
+  way (:data:`CLI_SIGNALS`): only the first of any number of signals raises, the others are ignored while the
+  interruption unwinds (a second Ctrl-C used to interrupt the cleanup that stops the workers, with an
+  "Exception ignored ... KeyboardInterrupt" traceback), and :func:`settle` ends the raising once the command
+  has decided its outcome (the line it prints and its exit status).
 * :func:`worker_initializer` — the ``initializer`` of a forked process pool: it restores the default action of
   SIGTERM/SIGHUP in the worker (a fork inherits the parent's Python handlers, with which ``terminate()`` would
   only raise an exception inside the running task) and makes the worker die with its parent, also when the
@@ -35,6 +39,8 @@ from mmg_casadi import _watchdog
 
 TERMINATION_SIGNALS: tuple[int, ...] = (signal.SIGTERM, signal.SIGHUP)
 """Signals handled like Ctrl-C by :func:`terminate_as_interrupt`."""
+CLI_SIGNALS: tuple[int, ...] = (signal.SIGINT, *TERMINATION_SIGNALS)
+"""Signals the command line program handles (:func:`terminate_as_interrupt`): Ctrl-C and the termination signals."""
 PR_SET_PDEATHSIG = 1
 """``prctl`` option: signal delivered to this process when its parent thread exits (``<linux/prctl.h>``)."""
 PARENT_POLL_INTERVAL = 1.0
@@ -112,18 +118,58 @@ def signal_name(err: BaseException) -> str:
     return signal.Signals(int(getattr(err, "signum", signal.SIGINT))).name
 
 
+_FIRED: list[int] = []
+"""Signals that raised :class:`Terminated` in the active :func:`terminate_as_interrupt` block (or were raised by
+:func:`end_deferred_signals`), and 0 once :func:`settle` was called: while it is not empty, signals are ignored."""
+_PROGRAM: list[bool] = []
+"""True once :func:`defer_startup_signals` ran: this process is the ``mmg-casadi`` program, not a library user."""
+
+
+def settle() -> None:
+    """Ignore the signals of the active :func:`terminate_as_interrupt` block from now on: the command has decided
+    its outcome (an error line, a result) and a late signal must not add a second line or a traceback.
+
+    Examples
+    --------
+    >>> with terminate_as_interrupt():
+    ...     settle()
+    ...     os.kill(os.getpid(), signal.SIGTERM)  # ignored
+    ...     time.sleep(0.05)
+    >>> print("still here")
+    still here
+    """
+    _FIRED.append(0)
+
+
+def is_program() -> bool:
+    """Whether this process is the ``mmg-casadi`` program (:func:`defer_startup_signals` ran at start-up).
+
+    Returns
+    -------
+    bool
+        True in the command line program, False where the package is imported as a library.
+    """
+    return bool(_PROGRAM)
+
+
 @contextlib.contextmanager
-def terminate_as_interrupt(signals=TERMINATION_SIGNALS):
+def terminate_as_interrupt(signals=TERMINATION_SIGNALS, *, ignore_on_exit: bool = False):
     """Within the block, the first of ``signals`` raises :class:`Terminated` in the main thread.
 
-    Further termination signals are ignored while the interruption unwinds (so the cleanup that stops the
-    workers and keeps the finished rows is not itself interrupted); the previous handlers are restored on exit.
-    Outside the main thread (where Python cannot install handlers) the block runs unchanged.
+    Further signals are ignored while the interruption unwinds (so the cleanup that stops the workers and keeps
+    the finished rows is not itself interrupted), and after :func:`settle`; the previous handlers are restored
+    on exit (or, with ``ignore_on_exit``, the signals stay ignored: the program is about to exit and a signal
+    while it does must neither print a traceback nor kill it without its line). Outside the main thread (where
+    Python cannot install handlers) the block runs unchanged.
 
     Parameters
     ----------
     signals : iterable of int, optional
-        Signal numbers to handle; default :data:`TERMINATION_SIGNALS` (SIGTERM and SIGHUP).
+        Signal numbers to handle; default :data:`TERMINATION_SIGNALS` (SIGTERM and SIGHUP); the CLI passes
+        :data:`CLI_SIGNALS` (SIGINT too). A SIGINT raises ``Terminated(SIGINT)`` (exit status 130).
+    ignore_on_exit : bool, optional
+        Leave the signals ignored on exit from the block instead of restoring the previous handlers (the
+        ``mmg-casadi`` program, :func:`is_program`).
 
     Yields
     ------
@@ -142,12 +188,13 @@ def terminate_as_interrupt(signals=TERMINATION_SIGNALS):
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    fired = []
+    outer = list(_FIRED)
+    _FIRED.clear()
 
     def handler(signum, _frame):
-        if fired:
+        if _FIRED:
             return
-        fired.append(signum)
+        _FIRED.append(signum)
         raise Terminated(signum)
 
     previous = {s: signal.signal(s, handler) for s in signals}
@@ -155,11 +202,12 @@ def terminate_as_interrupt(signals=TERMINATION_SIGNALS):
         yield
     finally:
         for s, h in previous.items():
-            signal.signal(s, h)
+            signal.signal(s, signal.SIG_IGN if ignore_on_exit else h)
+        _FIRED[:] = outer
 
 
 @contextlib.contextmanager
-def keep_termination_handlers(signals=TERMINATION_SIGNALS):
+def keep_termination_handlers(signals=CLI_SIGNALS):
     """Undo changes made within the block to the handlers of ``signals`` (e.g. by ``ray.init``, which installs
     its own SIGTERM handler that exits without the resume message).
 
@@ -207,7 +255,14 @@ def _record(signum, _frame):
     _RECEIVED.append(signum)
 
 
-def defer_startup_signals(signals=(*TERMINATION_SIGNALS, signal.SIGINT)) -> None:
+def _ignore_sigint_in_child() -> None:
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread of the child (cannot happen after fork, but never fail there)
+        pass
+
+
+def defer_startup_signals(signals=(*TERMINATION_SIGNALS, signal.SIGINT), *, program: bool = False) -> None:
     """Record, instead of acting on, the ``signals`` that arrive while the command line program starts.
 
     Loading the package takes seconds (CasADi, NumPy, SciPy); a SIGTERM then (e.g. the first seconds of a cold
@@ -221,6 +276,9 @@ def defer_startup_signals(signals=(*TERMINATION_SIGNALS, signal.SIGINT)) -> None
     ----------
     signals : iterable of int, optional
         Signals to defer; default SIGTERM, SIGHUP and SIGINT.
+    program : bool, optional
+        This process is the ``mmg-casadi`` program (:func:`is_program`; the package passes True when it is
+        loaded as the program): children it forks ignore SIGINT from their first instruction on.
 
     Examples
     --------
@@ -234,6 +292,11 @@ def defer_startup_signals(signals=(*TERMINATION_SIGNALS, signal.SIGINT)) -> None
     """
     if threading.current_thread() is not threading.main_thread():
         return
+    if program and not _PROGRAM:
+        _PROGRAM.append(True)
+        # a child forked by the program (a pool worker) ignores Ctrl-C from the first instruction on: the
+        # program stops its workers itself (SIGTERM), a worker's KeyboardInterrupt would print a traceback
+        os.register_at_fork(after_in_child=_ignore_sigint_in_child)
     for s in signals:
         current = signal.getsignal(s)
         if current is signal.SIG_DFL or current is signal.default_int_handler:
@@ -257,6 +320,7 @@ def end_deferred_signals() -> None:
     if _RECEIVED:
         signum = _RECEIVED[0]
         _RECEIVED.clear()
+        _FIRED.append(signum)  # as if the handler of terminate_as_interrupt had raised it: the next are ignored
         raise Terminated(signum)
 
 
@@ -279,7 +343,8 @@ def _watch_parent(parent_pid: int, interval: float) -> None:
 
 
 def worker_initializer(parent_pid: int) -> None:
-    """Initializer of a forked pool worker: default SIGTERM/SIGHUP and death with the parent ``parent_pid``.
+    """Initializer of a forked pool worker: default SIGTERM/SIGHUP, SIGINT ignored (the parent, which gets the
+    terminal's Ctrl-C too, stops its workers with SIGTERM), and death with the parent ``parent_pid``.
 
     Pass the parent's pid (``os.getpid()`` in the parent, before the pool starts): if the parent died between
     the fork and this call the worker exits at once.
@@ -302,6 +367,7 @@ def worker_initializer(parent_pid: int) -> None:
     """
     for s in TERMINATION_SIGNALS:
         signal.signal(s, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a terminal's Ctrl-C reaches the whole group: the parent stops us
     if not _set_parent_death_signal(signal.SIGTERM):
         threading.Thread(target=_watch_parent, args=(parent_pid, PARENT_POLL_INTERVAL), daemon=True,
                          name="parent-watch").start()

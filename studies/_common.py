@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mmg_casadi.guidance import methods as registry
-from mmg_casadi.io import write_json
+from mmg_casadi.io import save_figure, write_json
 from mmg_casadi.params import resolve
 from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_circle, draw_goal, draw_path, marine_axes
 from mmg_casadi.scenarios.scenario import with_method
@@ -103,5 +103,5 @@ def plot_comparison(by_method: dict, path, title="") -> Figure:
         a2.legend(fontsize=7)
     if title:
         fig.suptitle(title)
-    fig.savefig(path, dpi=FIGURE_DPI)
+    save_figure(fig, path, dpi=FIGURE_DPI)
     return fig

@@ -33,7 +33,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mmg_casadi.scenarios.encounters import colregs_cases, waypoint_square
-from mmg_casadi.io import write_json
+from mmg_casadi.io import save_figure, write_json
 from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.errors import InputError
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
@@ -279,7 +279,7 @@ def _plot_legs(legs: dict, path) -> Figure:
         ax.set_title(f"straight leg, beam {dname}", fontsize=10)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
-    fig.savefig(path, dpi=FIGURE_DPI)
+    save_figure(fig, path, dpi=FIGURE_DPI)
     return fig
 
 
@@ -299,5 +299,5 @@ def _plot_squares(squares: dict, path) -> Figure:
         marine_axes(ax)
         ax.set_title(f"waypoint square, {dname}", fontsize=10)
         ax.legend(fontsize=7, loc="center")
-    fig.savefig(path, dpi=FIGURE_DPI)
+    save_figure(fig, path, dpi=FIGURE_DPI)
     return fig

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from mmg_casadi.guidance import methods as registry
 from mmg_casadi.scenarios.imazu import CASES, plot_imazu, run_imazu
-from mmg_casadi.io import write_json
+from mmg_casadi.io import write_json, write_text
 from mmg_casadi.params import resolve
 from mmg_casadi.errors import InputError
 from mmg_casadi.montecarlo.stats import wilson
@@ -95,6 +95,6 @@ def run(out, *, methods=None, params=None, targets: str = "both") -> dict:
             print(f"  imazu targets {tg:5s} {m:>18s}: own ship safe in {len(rows) - len(unsafe)}/{len(rows)}"
                   + (f" (not: {unsafe})" if unsafe else "") + f", risky encounters kept {res['kept']}/"
                   f"{res['encounters']}", file=sys.stderr)
-    (out / "imazu.md").write_text(_table(metrics["results"]), encoding="utf-8")
+    write_text(out / "imazu.md", _table(metrics["results"]))
     write_json(out / "metrics.json", metrics)
     return metrics

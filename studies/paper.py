@@ -32,7 +32,7 @@ from pathlib import Path
 from mmg_casadi.montecarlo.comparisons import compare_methods
 from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.colregs.scorer import judged_encounters
-from mmg_casadi.io import write_json
+from mmg_casadi.io import write_json, write_text
 from mmg_casadi.scenarios import encounters
 from mmg_casadi.guidance.methods import PAPER_STATISTICS
 from mmg_casadi.montecarlo.study import check_resumable, check_study_args, run_study
@@ -97,7 +97,7 @@ def run(out, *, runs: int = PAPER_RUNS, base_seed: int = 0, params=None, workers
             if r["run"] < runs and r["environment"] in envs and r["method"] in PAPER_STATISTICS]
     claims = evaluate_claims(quick, summary.rows, rows)
     write_json(out / "claims.json", claims)
-    (out / "claims.md").write_text(claims_markdown(claims, runs=runs), encoding="utf-8")
+    write_text(out / "claims.md", claims_markdown(claims, runs=runs))
     print(claims_markdown(claims, runs=runs), file=sys.stderr)
     return {"runs": runs, "claims": claims}
 

@@ -26,7 +26,7 @@ from matplotlib.figure import Figure
 
 from mmg_casadi.guidance import methods as registry
 from mmg_casadi.errors import InputError
-from mmg_casadi.io import write_json
+from mmg_casadi.io import atomic_open, save_figure, write_json, write_text
 from mmg_casadi.limits import check_study_size
 from mmg_casadi.montecarlo.study import check_resumable, check_study_args, run_study
 from mmg_casadi.params import PARAMETERS, check_value
@@ -187,12 +187,12 @@ def run(out, *, param: str, values, baseline=None, runs: int = 200, envs="5", me
                     row[f"failures_{f}"] = sum(x == f for x in o["failure"])
                 table.append(row)
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / "sweep.csv", "w", newline="", encoding="utf-8") as fh:
+    with atomic_open(out / "sweep.csv", "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=list(table[0]))
         w.writeheader()
         w.writerows(table)
     md = markdown(table, param)
-    (out / "sweep.md").write_text(md, encoding="utf-8")
+    write_text(out / "sweep.md", md)
     plot_sweep(table, param, out / "sweep.png")
     metrics = {"param": param, "values": vals, "baseline": base_v, "runs": runs, "envs": list(envs),
                "methods": list(methods), "base_seed": base_seed, "params": others, "rows": table}
@@ -282,5 +282,5 @@ def plot_sweep(table: list, param: str, path) -> Figure:
     ax2.grid(True, alpha=0.3)
     if ax2.get_legend_handles_labels()[0]:
         ax2.legend(fontsize=8)
-    fig.savefig(path, dpi=FIGURE_DPI)
+    save_figure(fig, path, dpi=FIGURE_DPI)
     return fig

@@ -45,6 +45,15 @@ def test_study_statistics_twice_gives_identical_runs(tmp_path, capsys):
     assert "identical outputs" in capsys.readouterr().out
 
 
+@pytest.mark.slow
+def test_study_statistics_with_two_workers_twice_is_identical_whatever_the_order_of_the_rows(tmp_path, capsys):
+    # two workers append batches in the order they finish: the second run's runs.csv rows may come in another
+    # order; --check-determinism matches them by (environment, method, run)
+    assert main(["study", "statistics", "--runs", "40", "--envs", "1,2", "--methods", "inverse-square,none",
+                 "--workers", "2", "--out", str(tmp_path / "o"), "--check-determinism"]) == 0
+    assert "identical outputs" in capsys.readouterr().out
+
+
 def test_a_second_run_that_differs_is_reported_and_exits_1(tmp_path, capsys, monkeypatch):
     real, calls = cli.run_scenario, []
 
@@ -95,3 +104,24 @@ def test_commands_without_the_option_refuse_it(tmp_path, capsys, argv):
     assert main(argv + ["--check-determinism"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("mmg-casadi: error: --check-determinism: expected an option of") and "\n" not in err
+
+
+def test_tables_of_runs_are_compared_by_key_not_by_row_order(tmp_path):
+    # runs.csv rows follow the order in which batches finish: two identical studies may store them in another
+    # order (before, `study statistics --check-determinism` reported a difference between identical runs)
+    from mmg_casadi.determinism import compare_outputs
+    head = "environment,method,run,success,guidance_call_us\n"
+    rows = ["1,a,0,True,0.5\n", "1,a,1,False,0.6\n", "2,a,0,True,0.7\n"]
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir(), b.mkdir()
+    (a / "runs.csv").write_text(head + "".join(rows))
+    (b / "runs.csv").write_text(head + "".join(reversed(rows)).replace("0.5", "9.9"))  # timing differs too
+    assert compare_outputs(a, b) == (None, 1)
+    (b / "runs.csv").write_text(head + "".join(reversed(rows)).replace("1,a,1,False", "1,a,1,True"))
+    diff, _n = compare_outputs(a, b)
+    assert diff == "runs.csv run {'environment': '1', 'method': 'a', 'run': '1'} column success: 'False' vs 'True'"
+    (b / "runs.csv").write_text(head + "".join(rows[:2]))
+    assert compare_outputs(a, b)[0] == "runs.csv: run {'environment': '2', 'method': 'a', 'run': '0'} only in the " \
+                                       "first run"
+    (b / "runs.csv").write_text(head + "".join(rows + rows[:1]))
+    assert "twice in the second run" in compare_outputs(a, b)[0]

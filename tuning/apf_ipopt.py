@@ -59,7 +59,6 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -68,6 +67,7 @@ from mmg_casadi.closed_loop.simulation import simulate, simulate_batch
 from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, Layout
 from mmg_casadi.closed_loop.step import AUX, build_closed_loop_step
 from mmg_casadi.errors import InputError, check_range
+from mmg_casadi.io import write_text
 from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.montecarlo.results import wilson_interval
 from mmg_casadi.params import PARAMETERS
@@ -694,9 +694,7 @@ def write_params_toml(result: TuningResult | dict, path) -> None:
     params = result.params_after if isinstance(result, TuningResult) else dict(result)
     lines = ["# modified sink-vortex parameters tuned by `mmg-casadi tune apf` (tuning/apf.py)", "[params]"]
     lines += [f"{k} = {float(params[k])!r}" for k in THETA]
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines) + "\n")
+    write_text(path, "\n".join(lines) + "\n")
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.io import write_json
+from mmg_casadi.io import write_json, write_text
 from mmg_casadi.montecarlo.results import ResultsTable
 from mmg_casadi.limits import MAX_RUNS, check_runs
 from mmg_casadi.montecarlo.study import check_resumable, check_study_args, run_study
@@ -297,7 +297,7 @@ def run(out, *, train: int = 195, holdout: int = 2000, params: dict | None = Non
         "files": {"params": str(out / "params.toml"), "report": str(out / "report.json")},
     }
     write_json(out / "report.json", report)
-    (out / "report.md").write_text(_markdown(report), encoding="utf-8")
+    write_text(out / "report.md", _markdown(report))
     say(_markdown(report))
     say(f"wrote {out / 'params.toml'}, {out / 'report.json'}, {out / 'report.md'} ({timings['total_s']:.0f} s)")
     return report

@@ -41,7 +41,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.io import write_json
+from mmg_casadi.io import atomic_open, write_json, write_text
 from mmg_casadi.limits import check_runs
 from mmg_casadi.montecarlo.encounter_summary import compare_encounters, summarize_encounters
 from mmg_casadi.montecarlo.results import ResultsTable
@@ -222,7 +222,7 @@ def judge(tuned_rows, default_rows, *, alpha: float = 0.05) -> dict:
 def _write_candidates(path: Path, table: list[dict]) -> None:
     cols = ["candidate", *SEARCH_BOX, "runs", "success", "encounters", "compliance", "stand_on", "give_way",
             "objective"]
-    with path.open("w", newline="", encoding="utf-8") as fh:
+    with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=cols)
         w.writeheader()
         w.writerows({c: row[c] for c in cols} for row in table)
@@ -401,6 +401,6 @@ def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16,
               "files": {"params": str(out / "params.toml"), "candidates": str(out / "candidates.csv"),
                         "report": str(out / "report.json")}}
     write_json(out / "report.json", report)
-    (out / "report.md").write_text(_markdown(report), encoding="utf-8")
+    write_text(out / "report.md", _markdown(report))
     say(_markdown(report))
     return report

@@ -28,11 +28,11 @@ Examples
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.io import write_text
 from mmg_casadi.montecarlo.stats import paired_comparison, wilson
 
 Z_95 = 1.959963984540054
@@ -198,7 +198,5 @@ def write_params(path, values: dict, *, title: str, baseline: str, caveat: str, 
         lines.append(f"# these values are NOT shown to be better than {caveat}")
     lines += [f"# {s}" for s in summary.splitlines() if s.strip()]
     lines += ["[params]", *[f"{k} = {float(v)!r}" for k, v in values.items()]]
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text(path, "\n".join(lines) + "\n")
 

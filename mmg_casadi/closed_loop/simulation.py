@@ -7,6 +7,7 @@ finished (reached its goal or diverged) or the horizon ``t_max`` (a step paramet
 
 from __future__ import annotations
 
+import csv
 import time
 from dataclasses import dataclass
 from functools import lru_cache
@@ -14,6 +15,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from mmg_casadi.io import atomic_open, atomic_path, csv_cell
 from mmg_casadi.compiled import compile_function, library_is_trusted, library_path, load_library
 from mmg_casadi.closed_loop.fleet import build_fleet_step, candidate_radius, neighbour_lists
 from mmg_casadi.closed_loop.layout import Layout
@@ -326,8 +328,9 @@ class Trajectory:
         path : str or Path
             Destination file.
         """
-        np.savez_compressed(path, t=self.t, states=self.states, aux=self.aux,
-                            state_names=np.array(self.layout.ship_state), aux_names=np.array(AUX))
+        with atomic_path(path) as tmp:  # the suffix is kept: ".npz" is not added a second time
+            np.savez_compressed(tmp, t=self.t, states=self.states, aux=self.aux,
+                                state_names=np.array(self.layout.ship_state), aux_names=np.array(AUX))
 
     def to_csv(self, path, names=None) -> None:
         """Long-format CSV: one row per (time, ship) with the MMG state and the auxiliary signals.
@@ -343,12 +346,14 @@ class Trajectory:
         cols = ["u", "v", "r", "x", "y", "psi", "delta", "status"]
         aux = np.concatenate([self.aux, self.aux[-1:]], axis=0) if len(self.aux) else np.zeros(
             (len(self.t), self.layout.n_ships, len(AUX)))
-        with open(path, "w") as fh:
-            fh.write(",".join(["t", "ship"] + cols + list(AUX)) + "\n")
+        cells = [csv_cell(n) for n in names]  # quoted by the csv module; never read as a spreadsheet formula
+        with atomic_open(path, "w", encoding="utf-8", newline="") as fh:
+            w = csv.writer(fh, lineterminator="\n")
+            w.writerow(["t", "ship"] + cols + list(AUX))
             for k, tk in enumerate(self.t):
                 for i in range(self.layout.n_ships):
                     vals = [self.states[k, i, self.layout.column(c)] for c in cols] + list(aux[k, i])
-                    fh.write(f"{tk:.4f},{names[i]}," + ",".join(f"{v:.6g}" for v in vals) + "\n")
+                    w.writerow([f"{tk:.4f}", cells[i], *(f"{v:.6g}" for v in vals)])
 
 
 def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200) -> Trajectory:

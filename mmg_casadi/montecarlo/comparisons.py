@@ -22,6 +22,7 @@ import math
 from itertools import combinations
 from pathlib import Path
 
+from mmg_casadi.io import atomic_open
 from mmg_casadi.montecarlo.stats import paired_comparison
 
 COMPARISON_COLUMNS: tuple[str, ...] = (
@@ -88,8 +89,7 @@ def write_csv(comparisons, path) -> Path:
         The path written.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", encoding="utf-8", newline="") as f:
+    with atomic_open(path, "w", encoding="utf-8", newline="") as f:
         w = csv.writer(f, lineterminator="\n")
         w.writerow(COMPARISON_COLUMNS)
         for c in comparisons:

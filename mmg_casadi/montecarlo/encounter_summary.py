@@ -30,6 +30,7 @@ from mmg_casadi.colregs.narrow_channel import KEPT_SHARE
 from mmg_casadi.colregs.roles import ROLES
 from mmg_casadi.colregs.verdict import RULES
 from mmg_casadi.errors import InputError
+from mmg_casadi.io import atomic_open
 from mmg_casadi.montecarlo.stats import paired_comparison, wilson
 
 GROUPS: tuple[str, ...] = ("all", *ROLES, *(f"rule {r}" for r in RULES))
@@ -292,7 +293,7 @@ def write_csv(table, path, columns) -> Path:
         The path written.
     """
     path = Path(path)
-    with open(path, "w", encoding="utf-8", newline="") as f:
+    with atomic_open(path, "w", encoding="utf-8", newline="") as f:
         writer = csv.writer(f, lineterminator="\n")
         writer.writerow(columns)
         for r in table:

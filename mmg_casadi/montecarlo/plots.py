@@ -15,6 +15,8 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
+from mmg_casadi.io import save_figure
+
 from mmg_casadi.errors import InputError
 from mmg_casadi.montecarlo.results import Summary
 
@@ -110,5 +112,5 @@ def plot_statistics(summary, path=None) -> Figure:
     if path is not None:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=150)
+        save_figure(fig, path, dpi=150)
     return fig

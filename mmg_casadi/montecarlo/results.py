@@ -20,6 +20,7 @@ from pathlib import Path
 
 from mmg_casadi.closed_loop.outcome import RUN_FAILURES
 from mmg_casadi.errors import InputError
+from mmg_casadi.io import atomic_open
 from mmg_casadi.montecarlo import failures as failure_mechanisms
 from mmg_casadi.montecarlo.stats import wilson
 
@@ -427,8 +428,7 @@ class Summary:
             The path written.
         """
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with open(path, "w", encoding="utf-8", newline="") as f:
+        with atomic_open(path, "w", encoding="utf-8", newline="") as f:
             writer = csv.writer(f, lineterminator="\n")
             writer.writerow(SUMMARY_COLUMNS)
             for r in self.rows:

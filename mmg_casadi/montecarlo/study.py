@@ -55,7 +55,7 @@ import numpy as np
 from mmg_casadi.colregs.scorer import SCORER_VERSION
 from mmg_casadi.errors import InputError
 from mmg_casadi.guidance import methods as method_registry
-from mmg_casadi.io import json_safe, write_json
+from mmg_casadi.io import StagedFiles, json_safe, write_json, write_text
 from mmg_casadi.limits import check_runs, check_study_size
 from mmg_casadi.montecarlo.batching import (BACKENDS, DEFAULT_BATCH, LocalExecutor, RayExecutor, _check_workers,
                                             check_ray_address, plan_batches, prepare_layouts)
@@ -278,33 +278,37 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
     rows = [row for row in table.read() if (row["environment"], row["method"], row["run"]) in planned]
     rows.sort(key=lambda r: (r["environment"], order[r["method"]], r["run"]))
     summary = summarize(rows)
-    summary.to_csv(out / "summary.csv")
     # scipy.stats (about 0.7 s to import): imported only when a study is written, not by `import mmg_casadi`
     from mmg_casadi.montecarlo.comparisons import compare_methods, to_markdown, write_csv  # scipy.stats: ~1 s
     comparisons = compare_methods(rows, methods)
-    write_csv(comparisons, out / "comparisons.csv")
     by_encounter = encounter_summary.summarize_encounters(rows)
     encounter_pairs = encounter_summary.compare_encounters(rows, methods)
-    encounter_summary.write_csv(by_encounter, out / "colregs.csv", encounter_summary.ENCOUNTER_COLUMNS)
-    encounter_summary.write_csv(encounter_pairs, out / "colregs_comparisons.csv", encounter_summary.PAIR_COLUMNS)
-    (out / "summary.md").write_text(
-        summary.to_markdown() + "\n\n## Failure mechanisms (own ship; mmg_casadi.montecarlo.failures)\n\n"
-        + summary.failures_markdown() + "\n\n## Paired comparisons (same runs; exact McNemar test)\n\n"
-        + to_markdown(comparisons) + "\n\n## COLREG encounters with a risk of collision (own ship; profile "
-        + f"{params['colregs_profile']}; mmg_casadi.montecarlo.encounter_summary)\n\n"
-        + encounter_summary.to_markdown(by_encounter, encounter_pairs) + "\n", encoding="utf-8")
     from mmg_casadi.montecarlo.plots import plot_statistics  # matplotlib: imported only when a study is written
-    plot_statistics(summary, out / "statistics.png")
-    failures = write_failures(rows, out / "failures", params=params)
-
-    config = {"runs": runs, "envs": list(envs), "methods": list(methods), "base_seed": base_seed,
-              "backend": backend, "address": address, "workers": workers, "batch_size": batch_size, "chunk": chunk,
-              **ranges.to_dict()}
-    write_json(out / "metrics.json", {
-        "config": config, "params": params, "summary": summary.rows, "comparisons": comparisons,
-        "colregs": {"by_encounter": by_encounter, "comparisons": encounter_pairs},
-        "runs_total": len(rows),
-        "runs_new": new_runs, "elapsed_s": elapsed, "failure_files": [str(p.relative_to(out)) for p in failures]})
+    # the final files: each written under a temporary name, all renamed at the end with metrics.json last (an
+    # interruption leaves the old set or the new, never a part of a file)
+    with StagedFiles() as st:
+        summary.to_csv(st.path(out / "summary.csv"))
+        write_csv(comparisons, st.path(out / "comparisons.csv"))
+        encounter_summary.write_csv(by_encounter, st.path(out / "colregs.csv"), encounter_summary.ENCOUNTER_COLUMNS)
+        encounter_summary.write_csv(encounter_pairs, st.path(out / "colregs_comparisons.csv"),
+                                    encounter_summary.PAIR_COLUMNS)
+        write_text(st.path(out / "summary.md"),
+                   summary.to_markdown() + "\n\n## Failure mechanisms (own ship; mmg_casadi.montecarlo.failures)\n\n"
+                   + summary.failures_markdown() + "\n\n## Paired comparisons (same runs; exact McNemar test)\n\n"
+                   + to_markdown(comparisons) + "\n\n## COLREG encounters with a risk of collision (own ship; profile "
+                   + f"{params['colregs_profile']}; mmg_casadi.montecarlo.encounter_summary)\n\n"
+                   + encounter_summary.to_markdown(by_encounter, encounter_pairs) + "\n")
+        plot_statistics(summary, st.path(out / "statistics.png"))
+        failures = write_failures(rows, out / "failures", params=params, staged=st)
+        config = {"runs": runs, "envs": list(envs), "methods": list(methods), "base_seed": base_seed,
+                  "backend": backend, "address": address, "workers": workers, "batch_size": batch_size,
+                  "chunk": chunk, **ranges.to_dict()}
+        write_json(st.path(out / "metrics.json"), {
+            "config": config, "params": params, "summary": summary.rows, "comparisons": comparisons,
+            "colregs": {"by_encounter": by_encounter, "comparisons": encounter_pairs},
+            "runs_total": len(rows),
+            "runs_new": new_runs, "elapsed_s": elapsed,
+            "failure_files": [str(p.relative_to(out)) for p in failures]})
     return summary
 
 
@@ -432,11 +436,12 @@ def _record_study_params(out: Path, params: dict, ranges: DisturbanceRanges) -> 
     write_json(out / "study.json", {"params": params, "disturbance": ranges.to_dict()})
 
 
-def write_failures(rows, directory, *, params: dict | None = None, limit: int = MAX_FAILURE_FILES) -> list[Path]:
+def write_failures(rows, directory, *, params: dict | None = None, limit: int = MAX_FAILURE_FILES,
+                   staged: StagedFiles | None = None) -> list[Path]:
     """Write the first ``limit`` failed runs (by run index) of every cell as replayable scenario TOML files.
 
     Files are named ``env{e}_{method}_run{r}.toml``; each holds the sampled scenario with that method and the
-    study's non-default parameter values in its ``[settings]``.
+    study's non-default parameter values in its ``[settings]``. Every file is written atomically.
 
     Parameters
     ----------
@@ -448,6 +453,9 @@ def write_failures(rows, directory, *, params: dict | None = None, limit: int = 
         The study's parameters.
     limit : int
         Files per (environment, method).
+    staged : StagedFiles, optional
+        Write the files with the other files of this set, when it is committed
+        (:class:`mmg_casadi.io.StagedFiles`); by default at once.
 
     Returns
     -------
@@ -461,13 +469,21 @@ def write_failures(rows, directory, *, params: dict | None = None, limit: int = 
             by_cell.setdefault((r["environment"], r["method"]), []).append(r)
     paths = []
     overrides = _non_default(params)
-    for (env, method), failed in by_cell.items():
-        for r in sorted(failed, key=lambda r: r["run"])[:limit]:
-            recorded = {c: r[c] for c in ENV_COLUMNS if r.get(c) is not None and r[c] == r[c]}
-            sc = sampled_scenario(env, method, r["run"], r["seed"] or 0, params=_non_default({**overrides,
-                                                                                             **recorded}))
-            path = directory / f"env{env}_{method}_run{r['run']}.toml"
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(dump_scenario(sc), encoding="utf-8")
-            paths.append(path)
+    own = staged is None
+    st = StagedFiles() if own else staged
+    try:
+        for (env, method), failed in by_cell.items():
+            for r in sorted(failed, key=lambda r: r["run"])[:limit]:
+                recorded = {c: r[c] for c in ENV_COLUMNS if r.get(c) is not None and r[c] == r[c]}
+                sc = sampled_scenario(env, method, r["run"], r["seed"] or 0, params=_non_default({**overrides,
+                                                                                                 **recorded}))
+                path = directory / f"env{env}_{method}_run{r['run']}.toml"
+                st.path(path).write_text(dump_scenario(sc), encoding="utf-8")
+                paths.append(path)
+    except BaseException:
+        if own:
+            st.discard()
+        raise
+    if own:
+        st.commit()
     return paths

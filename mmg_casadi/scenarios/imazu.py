@@ -37,6 +37,7 @@ from mmg_casadi.colregs.profiles import scoring_profile
 from mmg_casadi.colregs.roles import classify_roles
 from mmg_casadi.colregs.scorer import judged_encounters
 from mmg_casadi.errors import InputError, check_range
+from mmg_casadi.io import save_figure
 from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_goal, draw_path, marine_axes
 from mmg_casadi.guidance.methods import NAMES as METHODS
 from mmg_casadi.params import PARAMETERS
@@ -326,5 +327,5 @@ def plot_imazu(rows: list[dict], path=None, *, title: str | None = None, ncols: 
     if title:
         fig.suptitle(title, fontsize=10)
     if path:
-        fig.savefig(path, dpi=FIGURE_DPI)
+        save_figure(fig, path, dpi=FIGURE_DPI)
     return fig

@@ -21,6 +21,7 @@ from pathlib import Path
 
 from mmg_casadi.errors import ScenarioError
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
+from mmg_casadi.io import write_text
 from mmg_casadi.scenarios.geodesy import LocalPlane, read_header, scenario_header
 from mmg_casadi.scenarios.maritime_export import DEFAULT_REFERENCE, dump_traffic_situation
 from mmg_casadi.scenarios.maritime_schema import hull_choices, load_traffic_situation
@@ -160,8 +161,5 @@ def convert_file(src, out, *, method: str = DEFAULT_METHOD, target_method: str =
     else:
         text = toml_to_json_text(src, reference=reference)
         n, hulls = 1 + len(json.loads(text)["targetShips"]), []
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(out.suffix + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(out)
+    write_text(out, text)
     return {"out": str(out), "ships": n, "hulls": hulls}

@@ -21,6 +21,8 @@ import json
 import sys
 from importlib import resources
 
+from mmg_casadi.io import write_text
+
 SCHEMA_ID = "https://mmg-casadi.invalid/schemas/metrics.schema.json"
 """``$id`` of the schema (a name, not a download address: the schema ships in the package and with the docs)."""
 
@@ -222,5 +224,5 @@ def load_metrics_schema() -> dict:
 if __name__ == "__main__":
     target = resources.files("mmg_casadi").joinpath("data", SCHEMA_FILE)
     with resources.as_file(target) as path:
-        path.write_text(schema_text(), encoding="utf-8")
+        write_text(path, schema_text())
     print(f"wrote {path}", file=sys.stderr)

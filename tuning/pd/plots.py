@@ -10,6 +10,7 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
+from mmg_casadi.io import save_figure
 from mmg_casadi.plotting import FIGURE_DPI
 from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel
 
@@ -27,7 +28,7 @@ def _hull(design: PdDesign) -> str:
 
 def _save(fig: Figure, path) -> Figure:
     if path is not None:
-        fig.savefig(path, dpi=FIGURE_DPI)
+        save_figure(fig, path, dpi=FIGURE_DPI)
     return fig
 
 
