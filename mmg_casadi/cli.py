@@ -520,6 +520,8 @@ def _identify(a) -> dict:
     from mmg_casadi.identify import identify_to_dir  # IPOPT: only for this command
     res = identify_to_dir(a.data, a.vessel, [n.strip() for n in a.free.split(",") if n.strip()], a.out)
     print(json.dumps(res["summary"], indent=1, ensure_ascii=False))
+    for w in res["warnings"]:  # also in identification.json and the vessel file's header
+        print(f"mmg-casadi: warning: identify: {w}", file=sys.stderr)
     return res
 
 

@@ -121,7 +121,7 @@ def check_range(field: str, value, low=None, high=None, *, low_open=False, high_
         raise cls(field, allowed, value)
     try:
         x = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: an int beyond any float
         raise cls(field, allowed, value) from None
     if x != x:
         raise cls(field, allowed, value)

@@ -26,7 +26,6 @@ import shutil
 import signal
 import tempfile
 import threading
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -340,17 +339,16 @@ def read_toml(path, what: str, cls=InputError) -> dict:
     ...
     mmg_casadi.errors.InputError: missing.toml: expected an existing, readable scenario file, got 'No such file or directory'
     """
+    from mmg_casadi.readers import MAX_BYTES, decode, loads_toml, read_bytes  # the one file reader
     path = Path(path)
+    kind = what if what in MAX_BYTES else "scenario"
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise cls(str(path), f"an existing, readable {what} file", err.strerror or str(err)) from None
-    except UnicodeDecodeError as err:
-        raise cls("toml", f"UTF-8 text in {path}", str(err)) from None
-    try:
-        return tomllib.loads(text)
-    except (tomllib.TOMLDecodeError, RecursionError) as err:  # RecursionError: arrays nested too deep
-        raise cls("toml", f"valid TOML in {path}", str(err)) from None
+        with open(path, "rb"):
+            pass
+    except (OSError, ValueError) as err:
+        raise cls(str(path), f"an existing, readable {what} file", getattr(err, "strerror", None) or str(err)) from None
+    text = decode(read_bytes(path, kind, str(path), cls), path, what, "toml", cls)
+    return loads_toml(text, path, what, "toml", cls)
 
 
 def write_text(path, text: str) -> Path:

@@ -30,6 +30,10 @@ its expression graph grows with the square of the fleet (``benchmarks/fleet_scal
 40 ships), so a larger ``fleet_from_ships`` than the scenario's size is refused above this."""
 MAX_OBSTACLES = 2000
 """Largest number of static obstacles of one scenario."""
+MAX_COORDINATE = 10_000.0
+"""Largest absolute coordinate of a position of a scenario [ship lengths]: 2300 km at the KCS's 230 m. The largest
+fleet the toolkit runs (``mmg-casadi traffic 2000``, environment 5's density) spans about 1400 L; the bound keeps
+every distance, its square and the fields' terms far from overflow (a start at 1e300 L made the step's NaN)."""
 MAX_WALL_SEGMENTS = 500
 """Largest number of wall segments of one scenario (every ship tests every segment at every step)."""
 MAX_STEPS = 100_000

@@ -27,7 +27,6 @@ import dataclasses
 import json
 import math
 import re
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -154,8 +153,8 @@ class Param:
                     or (self.high is not None and value > self.high)):
                 raise cls(field, self.allowed(), value)
             return int(value)
-        if not _is_real(value) or not math.isfinite(value):
-            raise cls(field, self.allowed(), value)
+        if not _is_real(value) or isinstance(value, int) and abs(value) > 2 ** 1023 or not math.isfinite(value):
+            raise cls(field, self.allowed(), value)  # an int beyond any float: refused, not an OverflowError
         return check_range(field, value, self.low, self.high, low_open=self.low_open, high_open=self.high_open,
                            cls=cls, unit=self.unit)
 
@@ -627,13 +626,9 @@ def load_file(path) -> dict:
     >>> load_file(f)
     {'r_safe': 12.0}
     """
+    from mmg_casadi.readers import load_toml  # size, UTF-8, nesting checked while reading
     path = Path(path)
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as err:
-        raise ParameterError("params file", "an existing, readable UTF-8 TOML file", f"{path} ({err})") from None
-    except (tomllib.TOMLDecodeError, RecursionError) as err:  # RecursionError: arrays nested too deep
-        raise ParameterError("params file", f"valid TOML ({err})", str(path)) from None
+    raw = load_toml(path, "parameter", "params file", ParameterError)
     if "params" in raw:
         if set(raw) != {"params"} or not isinstance(raw["params"], dict):
             raise ParameterError("params file", "either parameters at the top level or one [params] table",

@@ -18,6 +18,28 @@ from mmg_casadi.io import save_figure
 FIGURE_DPI = 150
 """Resolution of every saved figure (PNG, dots per inch): the figures of the studies, the tuning and the site."""
 
+def escape_text(text) -> str:
+    """``text`` for a figure, shown as written: a ``$`` is escaped, so matplotlib never reads a name (of a ship, a
+    vessel, a method) as mathtext (``"$\\frac{$"`` used to stop the figure with a parse error).
+
+    Parameters
+    ----------
+    text : object
+        The text (``str()`` is taken).
+
+    Returns
+    -------
+    str
+        The text with every ``$`` as ``\\$``.
+
+    Examples
+    --------
+    >>> escape_text("$x$ ship")
+    '\\\\$x\\\\$ ship'
+    """
+    return str(text).replace("$", r"\$")
+
+
 COLORS = ("tab:blue", "tab:red", "tab:green", "tab:orange", "tab:purple", "tab:brown", "tab:pink",
           "tab:gray", "tab:olive", "tab:cyan")
 
@@ -250,7 +272,7 @@ def plot_paths(result, ax, *, title=None):
     """
     traj, sc = result.trajectory, result.scenario
     N = traj.layout.n_ships
-    names = [s.name for s in sc.ships]
+    names = [escape_text(s.name) for s in sc.ships]
     mask = traj.sailing_mask()
     r_safe = result.params["r_safe"]
     for i in range(N):
@@ -309,7 +331,7 @@ def plot_scenario(result, path=None, *, title=None) -> Figure:
     """
     traj, sc = result.trajectory, result.scenario
     N = traj.layout.n_ships
-    names = [s.name for s in sc.ships]
+    names = [escape_text(s.name) for s in sc.ships]
     mask = traj.sailing_mask()
     r_safe = result.params["r_safe"]
     cd = result.params["collision_distance"]
@@ -333,7 +355,7 @@ def plot_scenario(result, path=None, *, title=None) -> Figure:
         inside = d <= r_safe
         if inside.any():
             dd = np.where(inside, d, np.nan)
-            a2.plot(traj.t, dd, label=f"{a}–{b}")
+            a2.plot(traj.t, dd, label=f"{escape_text(a)}–{escape_text(b)}")
     a2.axhline(cd, color="k", ls="--", lw=1, label=f"collision ({cd:g} L)")
     a2.set_ylabel("distance inside R_safe [L]")
     a2.set_xlabel("t [L/U]")

@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from mmg_casadi.guidance import methods as registry
 from mmg_casadi.io import save_figure, write_json
 from mmg_casadi.params import resolve
-from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_circle, draw_goal, draw_path, marine_axes
+from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_circle, draw_goal, draw_path, escape_text, marine_axes
 from mmg_casadi.scenarios.scenario import with_method
 from mmg_casadi.scenarios.run import run_scenario, write_outputs
 
@@ -75,7 +75,7 @@ def plot_comparison(by_method: dict, path, title="") -> Figure:
         for i, s in enumerate(sc.ships):
             c = COLORS[i % len(COLORS)]
             k = mask[:, i]
-            lab = s.name + (f" ({r.encounter_labels[i]})" if i in r.encounter_labels else "")
+            lab = escape_text(s.name) + (f" ({r.encounter_labels[i]})" if i in r.encounter_labels else "")
             draw_path(ax, tr.state("x", i)[k], tr.state("y", i)[k], tr.state("psi", i)[k], c, label=lab,
                       n_outlines=5)
             g = s.waypoints[-1]
@@ -94,7 +94,7 @@ def plot_comparison(by_method: dict, path, title="") -> Figure:
         for (a, b), d in r.pair_distances().items():
             inside = d <= r.params["r_safe"]
             if np.any(inside):
-                a2.plot(tr.t, np.where(inside, d, np.nan), label=f"{a}–{b}")
+                a2.plot(tr.t, np.where(inside, d, np.nan), label=f"{escape_text(a)}–{escape_text(b)}")
         cd = r.params["collision_distance"]
         a2.axhline(cd, color="k", ls="--", lw=1, label=f"{cd:g} L")
         a2.set_xlabel("t [L/U]")

@@ -26,7 +26,6 @@ import csv
 import dataclasses
 import io
 import itertools
-import json
 import math
 import sys
 import time
@@ -40,6 +39,7 @@ from mmg_casadi.guidance import methods as registry
 from mmg_casadi.io import write_text
 from mmg_casadi.montecarlo.stats import paired_comparison, wilson
 from mmg_casadi.params import resolve
+from mmg_casadi.readers import load_json
 from mmg_casadi.scenarios.generate import ROLES, requested_types
 from mmg_casadi.scenarios.run import run_scenario
 from mmg_casadi.scenarios.scenario import load_scenario, with_method
@@ -237,7 +237,7 @@ def run(out, *, set_dir, methods=None, targets: str = "hold", params=None) -> di
     generation = None
     record = Path(set_dir) / "generation.json"
     if record.is_file():  # read by requested_types above: valid JSON
-        generation = json.loads(record.read_text(encoding="utf-8")).get("stats")
+        generation = load_json(record, "generation record").get("stats")
     situations, encounters = [], []
     for m in methods:
         safe = 0

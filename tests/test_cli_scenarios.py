@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 from importlib import resources
 
 import pytest
@@ -73,3 +74,28 @@ def test_a_missing_file_is_still_a_missing_file(tmp_path, monkeypatch, capsys):
     assert main(["simulate", "sub/head_on.toml", "--out", "run"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "sub/head_on.toml" in err and "existing" in err
+
+
+def test_hostile_ship_names_reach_every_output_format_intact(tmp_path, capsys):
+    # a name matplotlib would read as mathtext, names a spreadsheet would read as formulas, a comma and a quote
+    # that split an unquoted CSV row: the figure is drawn, trajectory.csv has one row per sample and ship with
+    # each name as written (a formula one behind an apostrophe), metrics.json keeps them
+    import csv
+    import json
+    from mmg_casadi.cli import main
+    names = ["$\\frac{$", '=HYPERLINK("x"),"a"']
+    text = (Path(__file__).resolve().parents[1] / "mmg_casadi" / "data" / "scenarios" / "head_on.toml").read_text()
+    text = text.replace('name = "ship1"', f"name = {json.dumps(names[0])}").replace(
+        'name = "ship2"', f"name = {json.dumps(names[1])}")
+    scenario = tmp_path / "names.toml"
+    scenario.write_text(text)
+    out = tmp_path / "out"
+    assert main(["simulate", str(scenario), "--set", "t_max=10", "--out", str(out)]) == 0, capsys.readouterr().err
+    assert any(p.suffix == ".png" and p.stat().st_size > 1000 for p in out.iterdir())
+    with open(out / "trajectory.csv", newline="", encoding="utf-8") as fh:
+        rows = list(csv.reader(fh))
+    header, rows = rows[0], rows[1:]
+    assert all(len(r) == len(header) for r in rows)
+    assert {r[header.index("ship")] for r in rows} == {names[0], "'" + names[1]}
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert [s["name"] for s in metrics["ships"]] == names

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import resource
 import shutil
@@ -69,6 +70,8 @@ def no_work(monkeypatch):
     monkeypatch.setattr(cli_apf, "training_set", _work)  # tune apf
     monkeypatch.setattr(cli_pd, "design_pd", _work)  # tune pd
     monkeypatch.setattr(cli, "generate", _work)  # generate (after its description and options are read)
+    import mmg_casadi.identify as identify
+    monkeypatch.setattr(identify, "identify", _work)  # identify (after its data file is read)
 
 
 @pytest.fixture(scope="module")
@@ -236,3 +239,150 @@ def test_pathological_inputs_are_one_line_errors(no_work, inputs, capsys, argv):
 @given(data=st.data())
 def test_any_command_line_many_examples(no_work, bounded_memory, inputs, capsys, data):
     _run(data, inputs, capsys)
+
+
+
+# ------------------------------------------------------------------------ every reader, hostile bytes (issue 47)
+
+HOSTILE_NAMES = ["$\\frac{$", "=HYPERLINK(\"http://x\")", "+1", "@SUM(A1)", "a,b", 'q"uote', "new\nline",
+                 "tab\there", "\u202eevil", "x" * 65, "x" * 2_000_000, "", "\u00fc\u4e2d \U0001f6a2", "\ud800"]
+"""Names: mathtext, spreadsheet formulas, CSV delimiters and quotes, control and bidi characters, too long (a 2 MB
+one took FreeType 112 s to refuse), empty, non-BMP, a lone surrogate."""
+HOSTILE_NUMBERS = ["1e300", "-1e300", "nan", "inf", "-inf", "1" + "0" * 400, "1e-320", "-0.0", "1e400"]
+"""Numbers: huge, non-finite, an integer beyond any float, subnormal, negative zero, beyond float range."""
+_GOOD_AIS = (DATA / "ais" / "synthetic_ais.csv").read_text()
+_KCS = (DATA / "kcs_mmg.toml").read_text()
+_HEAD_ON = (DATA / "scenarios" / "head_on.toml").read_text()
+_TRAFFIC = (DATA / "traffic_situation.json").read_text()
+_SQUARE = ('{"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {"name": "isle"}, '
+           '"geometry": {"type": "Polygon", "coordinates": [[[10.3, 58.05], [10.31, 58.05], [10.31, 58.06], '
+           '[10.3, 58.06], [10.3, 58.05]]]}}]}')
+_CHART = ('[chart]\nland_file = "land.geojson"\norigin = [58.0, 10.2]\n')
+_TRACK = "t,x,y\n0,50,10\n50,10,10\n100,-30,10\n"
+_TRACKED = ('[settings]\nmethod = "modified-vortex"\nt_max = 100.0\n\n[[ships]]\nname = "own"\nstart = [0.0, 0.0]\n'
+            'heading = 0.0\nspeed = 1.0\nwaypoints = [[50.0, 0.0]]\n\n[[ships]]\nname = "target"\n'
+            'track = "track.csv"\n')
+_IDENT = "t,u,v,r,psi,delta,rpm\n" + "".join(f"{k},12.0,0.0,0.0,0.0,0.1,115.5\n" for k in range(20))
+
+
+def _toml_string(name: str) -> str:
+    return json.dumps(name)  # a TOML basic string: JSON's escapes (a lone surrogate is no valid TOML)
+
+
+READERS = {
+    # kind: (file name, good text, command line with {f} the file and {d} its folder)
+    "scenario": ("s.toml", _HEAD_ON, ["simulate", "{f}", "--out", "out"]),
+    "GeoJSON": ("land.geojson", _SQUARE, ["simulate", "{d}/chart.toml", "--out", "out"]),
+    "traffic situation": ("t.json", _TRAFFIC, ["convert", "{f}", "--out", "o.toml"]),
+    "AIS": ("a.csv", _GOOD_AIS, ["replay", "{f}", "--own", "999000001", "--out", "o.toml"]),
+    "track": ("track.csv", _TRACK, ["simulate", "{d}/tracked.toml", "--out", "out"]),
+    "vessel": ("v.toml", _KCS, ["maneuver", "turning", "--vessel", "{f}", "--out", "out"]),
+    "identification data": ("i.csv", _IDENT, ["identify", "{f}", "--free", "Nr", "--out", "out"]),
+    "parameter": ("p.toml", "[params]\nr_safe = 12.0\nkp = 3.0\n", ["simulate", "head_on", "--params", "{f}",
+                                                                    "--out", "out"]),
+}
+_NUMBER = r"(?<![\w.\-])-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?(?![\w.])"
+_STRING = r'"[^"\n]*"'
+
+
+@st.composite
+def hostile_files(draw):
+    """``(kind, bytes)``: a reader's good file with one number or string replaced by a hostile one, or with
+    malformed bytes, nesting far too deep, or random bytes."""
+    import re
+    kind = draw(st.sampled_from(sorted(READERS)))
+    _name, good, _argv = READERS[kind]
+    csv_file = kind in ("AIS", "track", "identification data")
+    what = draw(st.sampled_from(["number", "number", "name", "name", "bytes", "deep", "random", "good"]))
+    if what == "good":
+        return kind, good.encode()
+    if what == "random":
+        return kind, draw(st.binary(max_size=300))
+    if what == "bytes":  # valid text with a byte that is no UTF-8 somewhere
+        data = good.encode()
+        k = draw(st.integers(0, len(data)))
+        return kind, data[:k] + draw(st.sampled_from([b"\xff", b"\xc3", b"\xed\xa0\x80", b"\x00"])) + data[k:]
+    if what == "deep":
+        n = draw(st.sampled_from([40, 3000, 100_000]))
+        if kind in ("GeoJSON", "traffic situation"):
+            return kind, ("[" * n + "]" * n).encode()
+        if csv_file:
+            return kind, (good.splitlines()[0] + "\n" + '"' + "[" * n + '"' + "\n").encode()
+        return kind, ("a = " + "[" * min(n, 5000) + "]" * min(n, 5000) + "\n" + good).encode()
+    pattern = _NUMBER if what == "number" else (_STRING if not csv_file else r"(?<=\n)[^,\n]+")
+    spots = [m.span() for m in re.finditer(pattern, good)]
+    if not spots:
+        return kind, good.encode()
+    a, b = draw(st.sampled_from(spots))
+    if what == "number":
+        new = draw(st.sampled_from(HOSTILE_NUMBERS))
+        if kind in ("GeoJSON", "traffic situation") and new in ("nan", "inf", "-inf"):
+            new = {"nan": "NaN", "inf": "Infinity", "-inf": "-Infinity"}[new]
+    else:
+        name = draw(st.sampled_from(HOSTILE_NAMES))
+        new = _toml_string(name) if not csv_file else '"' + name.replace('"', '""') + '"'
+    return kind, (good[:a] + new + good[b:]).encode("utf-8", errors="surrogatepass")
+
+
+def _reader_property(kind: str, data: bytes, capsys) -> None:
+    name, _good, argv = READERS[kind]
+    with tempfile.TemporaryDirectory() as d:
+        d = Path(d)
+        (d / name).write_bytes(data)
+        if kind == "GeoJSON":
+            (d / "chart.toml").write_text(_HEAD_ON + "\n" + _CHART)
+        if kind == "track":
+            (d / "tracked.toml").write_text(_TRACKED)
+        _property([a.replace("{f}", str(d / name)).replace("{d}", str(d)) for a in argv], d, capsys)
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                  HealthCheck.function_scoped_fixture])
+@given(hostile_files())
+def test_every_reader_refuses_hostile_files_in_one_line_and_writes_nothing(no_work, bounded_memory, capsys, case):
+    # malformed bytes, deep nesting, huge and non-finite numbers, hostile names, in every file the toolkit reads:
+    # exit 0 (or the work reached) with a valid file, else exit 2 with one line and nothing written; never a
+    # traceback (before: UnicodeDecodeError, RecursionError, a CasADi error after compiling, FreeType overflow)
+    kind, data = case
+    event(kind)
+    _reader_property(kind, data, capsys)
+
+
+@pytest.mark.parametrize("kind,text,message", [
+    ("GeoJSON", "\xff", "expected a GeoJSON file in UTF-8"),
+    ("GeoJSON", "[" * 100_000 + "]" * 100_000, "nested at most 32 levels deep"),
+    ("traffic situation", "[" * 100_000 + "]" * 100_000, "nested at most 32 levels deep"),
+    ("traffic situation", _TRAFFIC.replace('"sog": 14.0', '"sog": NaN', 1), "NaN is not a number JSON allows"),
+    ("vessel", _KCS.replace("L = 230.0", "L = 0.0", 1), "ship.L: expected a number in (0, 1000] m"),
+    ("vessel", _KCS.replace("U_design = ", "U_design = -", 1), "ship.U_design: expected a number in (0, 50]"),
+    ("vessel", _KCS.replace("\nm = ", "\nm = -", 1), "mass.m: expected a number in (0, 100]"),
+    ("vessel", _KCS.replace("\nYb = ", "\nYbb = 1.0\nYb = ", 1), "hull.Ybb: expected a known key of [hull]"),
+    ("scenario", _HEAD_ON.replace("start = [50.0, 0.0]", "start = [1e300, 0.0]", 1), "MAX_COORDINATE"),
+    ("scenario", _HEAD_ON + '\n[[land]]\npoints = [[20, 20], [40, 40], [40, 20], [20, 30]]\n',
+     "expected a simple polygon"),
+    ("scenario", _HEAD_ON.replace('name = "ship2"', 'name = "' + "x" * 2_000_000 + '"', 1),
+     "expected a name of 1 to 64 characters"),
+    ("AIS", _GOOD_AIS + "x" * 64 + "y,2026-05-04T10:00:00,57.9,10.2,1,1\n", ".mmsi: expected a name of 1 to 64"),
+    ("identification data", _IDENT.replace("12.0", "1e300", 1), "finite numbers of magnitude at most"),
+])
+def test_hostile_files_of_the_issue_are_one_line_errors(no_work, capsys, kind, text, message):
+    name, _good, argv = READERS[kind]
+    with tempfile.TemporaryDirectory() as d, contextlib.chdir(d):
+        d = Path(d)
+        (d / name).write_bytes(text.encode("utf-8", errors="surrogateescape") if text != "\xff" else b"\xff{}")
+        if kind == "GeoJSON":
+            (d / "chart.toml").write_text(_HEAD_ON + "\n" + _CHART)
+        capsys.readouterr()
+        assert cli.main([a.replace("{f}", str(d / name)).replace("{d}", str(d)) for a in argv]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("mmg-casadi: error: ") and message in err[0], err
+        assert len(err[0]) < 1000
+        assert sorted(p.name for p in d.iterdir()) == sorted({name, "chart.toml"} & {p.name for p in d.iterdir()})
+
+
+@pytest.mark.slow
+@settings(max_examples=1500, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                   HealthCheck.function_scoped_fixture])
+@given(hostile_files())
+def test_every_reader_many_examples(no_work, bounded_memory, capsys, case):
+    _reader_property(*case, capsys)

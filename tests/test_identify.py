@@ -9,6 +9,7 @@ r and 2e-3 rad (0.11°) on ψ, seed 1. Rudder angle and propeller speed are take
 from __future__ import annotations
 
 import csv
+import json
 
 import numpy as np
 import pytest
@@ -166,3 +167,44 @@ def test_identify_names_a_missing_column(tmp_path, capsys):
     data.write_text("t,u,v,r,psi,delta\n0,1,0,0,0,0\n")
     assert main(["identify", str(data), "--free", "Nr", "--out", str(tmp_path / "o")]) == 2
     assert "data column 'rpm': expected columns t, u, v, r, psi, delta, rpm" in capsys.readouterr().err
+
+
+def _constant_rudder_csv(path, n: int) -> None:
+    """Straight running at a constant rudder angle with no yaw: nothing in these data separates the coefficients."""
+    rng = np.random.default_rng(1)
+    t = np.arange(n) * 1.0
+    d = {"t": t, "u": 12.0 + rng.normal(0, 0.02, n), "v": rng.normal(0, 0.02, n), "r": rng.normal(0, 2e-4, n),
+         "psi": rng.normal(0, 1e-3, n), "delta": np.full(n, 0.1), "rpm": np.full(n, 115.5)}
+    _write_csv(path, [d])
+
+
+def test_identify_warns_and_marks_its_output_when_the_data_cannot_separate_the_coefficients(tmp_path, capsys):
+    # the issue's case: a constant rudder gave "Solved_To_Acceptable_Level" with coefficients on their bounds
+    # (correlation -0.986) and no word of it
+    data = tmp_path / "constant.csv"
+    _constant_rudder_csv(data, 200)
+    out = tmp_path / "fit"
+    assert main(["identify", str(data), "--free", "Yb,Nb,Nr", "--out", str(out)]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    report = json.loads((out / "identification.json").read_text())
+    assert report["warnings"] and err == [f"mmg-casadi: warning: identify: {w}" for w in report["warnings"]]
+    assert any("sits on its" in w and "bound" in w for w in report["warnings"])
+    assert any("correlate at" in w and "cannot separate" in w for w in report["warnings"])
+    header = (out / "kcs_identified.toml").read_text().splitlines()[:2 + len(report["warnings"])]
+    assert header[2:] == [f"# WARNING: {w}" for w in report["warnings"]]
+
+
+def test_a_fit_of_separable_data_has_no_bound_warning(fit):
+    assert not any("bound" in w for w in fit.warnings())
+    assert all("correlate" in w for w in fit.warnings())  # only the known Y_beta / Y_r - m_x trade-off, if at all
+
+
+def test_identify_refuses_more_samples_than_it_can_fit_before_reading_them_all(tmp_path, capsys):
+    from mmg_casadi.identify import MAX_SAMPLES
+    data = tmp_path / "long.csv"
+    _constant_rudder_csv(data, MAX_SAMPLES + 1)
+    assert main(["identify", str(data), "--free", "Nr", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"mmg-casadi: error: data file: expected an identification data file of at most {MAX_SAMPLES} "
+                   f"rows, got '{data}: more'"]
+    assert not (tmp_path / "o").exists()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import dataclasses
 import datetime
 import tomllib
 from importlib.resources import files
@@ -249,9 +250,14 @@ def test_round_trip_full():
 
 
 def test_round_trip_odd_values():
-    ship = ShipSpec('a "quoted" \\ name\t', (0.1, -1e-7), -135.123456789, 0.2, ((1e5, 1.0 / 3.0),))
+    ship = ShipSpec('a "quoted" \\ name, $x$ =1', (0.1, -1e-7), -135.123456789, 0.2, ((1e4, 1.0 / 3.0),))
     s = Scenario(Settings("none", dt=2.0, params={"k_rep": 2e5}), (ship,))
     assert scenario_from_dict(tomllib.loads(dump_scenario(s))) == s
+    # a control character (a tab, a newline, a right-to-left override) is no part of a name
+    for bad in ("name\t", "a\nb", "evil\u202egnp.exe", "x" * 65, ""):
+        with pytest.raises(ScenarioError, match="expected a name of 1 to 64 characters"):
+            scenario_from_dict(tomllib.loads(dump_scenario(dataclasses.replace(s, ships=(
+                dataclasses.replace(ship, name=bad),)))))
 
 
 def test_ship_size_and_metadata_round_trip(tmp_path):

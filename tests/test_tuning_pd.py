@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -249,3 +250,16 @@ def test_cli_tune_pd_vessel_kvlcc2(tmp_path):
     assert abs(m["nomoto_K"] - kcs.nomoto_K) > 1.0 and abs(m["nomoto_T"] - kcs.nomoto_T) > 1.0
     assert m["waypoint_square"]["design"]["status"] == "reached"
     assert m["recommended"]["square"]["status"] == "reached"
+
+
+def test_cli_tune_pd_a_hull_without_a_default_natural_frequency_names_vessel_not_wn(tmp_path, capsys):
+    # a yaw damping of the wrong sign: no natural frequency meets the limits, and the user gave no --wn; the
+    # error used to name --wn
+    text = (Path(__file__).resolve().parents[1] / "mmg_casadi" / "data" / "kcs_mmg.toml").read_text()
+    hull = tmp_path / "unstable.toml"
+    hull.write_text("\n".join("Nr = 0.05" if line.startswith("Nr = ") else line for line in text.splitlines()))
+    out = tmp_path / "o"
+    assert main(["tune", "pd", "--vessel", str(hull), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mmg-casadi: error: --vessel: expected a hull whose yaw dynamics")
+    assert "--wn" not in err[0].split("(or give --wn)")[0] and not out.exists()

@@ -235,7 +235,7 @@ def test_maneuver_command_sails_a_hull_and_refuses_a_bad_vessel_file_in_one_line
     bad.write_text(data_path("kvlcc2").read_text().replace("Yv = -0.315", 'Yv = "fast"'))
     assert main(["maneuver", "turning", "--vessel", str(bad), "--out", str(tmp_path / "t")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == ["mmg-casadi: error: Yv: expected a finite number, got 'fast'"]
+    assert err == [f"mmg-casadi: error: {bad}: hull.Yv: expected a finite number, got 'fast'"]
     assert not (tmp_path / "t").exists()
 
 

@@ -89,7 +89,14 @@ def run(out, *, speed: float = 1.0, zeta: float | None = None, wn: float | None 
     tracking_tolerance = check_range("tracking_tolerance", tracking_tolerance, 0.0, 1.0, cls=InputError)
     hull = load_vessel(vessel)
     vessel = str(vessel)
-    design = design_pd(speed, PdSpec(zeta=zeta, wn=wn), vessel=vessel)
+    try:
+        design = design_pd(speed, PdSpec(zeta=zeta, wn=wn), vessel=vessel)
+    except InputError as e:
+        if e.field != "wn" or wn is not None:
+            raise
+        # no --wn was given: the hull, not the option, leaves no natural frequency to place the poles at
+        raise InputError("vessel", "a hull whose yaw dynamics leave a natural frequency within the limits of its "
+                         "steering gear (or give --wn)", vessel) from None
     gmap = paper_gains_map(speed, vessel=vessel)
     paper = gmap.paper
     square = vessel in VESSELS  # the closed loop sails library hulls only

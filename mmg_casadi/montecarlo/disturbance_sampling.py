@@ -16,13 +16,13 @@ direction, so adding a wind range leaves the current of every run unchanged.
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.readers import is_finite
 from mmg_casadi.params import PARAMETERS
 
 ENV_COLUMNS: tuple[str, ...] = ("current_speed", "current_direction_deg", "wind_speed", "wind_direction_deg")
@@ -41,9 +41,7 @@ def _check_range(field: str, value) -> tuple[float, float] | None:
         return None
     p = PARAMETERS[_RANGE_PARAM[field]]
     allowed = f"(low, high) with {p.low:g} <= low <= high <= {p.high:g} {p.unit}"
-    ok = isinstance(value, (tuple, list)) and len(value) == 2 and all(
-        isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and math.isfinite(v)
-        for v in value)
+    ok = isinstance(value, (tuple, list)) and len(value) == 2 and all(is_finite(v) for v in value)
     if not ok or not p.low <= value[0] <= value[1] <= p.high:
         raise InputError(field, allowed, value)
     return float(value[0]), float(value[1])

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.readers import is_finite
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
 from mmg_casadi.montecarlo.land_sampling import ENVIRONMENT as LAND_ENVIRONMENT, sample_strait
 from mmg_casadi.params import PARAMETERS
@@ -100,8 +101,7 @@ class SamplerConfig:
 
 
 def _is_number(value) -> bool:
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) \
-        and math.isfinite(value)
+    return is_finite(value)
 
 
 def _readonly(values, shape_tail: tuple[int, ...]) -> np.ndarray:

@@ -30,16 +30,17 @@ reports.
 
 from __future__ import annotations
 
-import csv
 import datetime
 import json
 import math
+from array import array
 from pathlib import Path
 
 import numpy as np
 
 from mmg_casadi.errors import InputError
 from mmg_casadi.guidance import methods as registry
+from mmg_casadi.readers import MAX_AIS_REPORTS, check_name, csv_rows, load_json
 from mmg_casadi.scenarios.geodesy import LocalPlane
 from mmg_casadi.scenarios.scenario import SPEED_RANGE, Scenario, scenario_from_dict
 from mmg_casadi.scenarios.tracks import MAX_TRACK_POINTS, MAX_TRACK_SPEED
@@ -95,17 +96,18 @@ def parse_time(text: str, field: str) -> float:
     return _time(text, field)
 
 
-def _json_rows(path: Path) -> list[dict]:
+def _json_rows(path: Path):
     """The reports of a JSON file (a list of objects, or an object whose ``reports`` is one) as CSV-like rows of
-    strings (a number as JSON writes it)."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as err:
-        raise InputError(str(path), "an existing, readable JSON file of AIS reports (UTF-8)", str(err)) from None
+    strings (a number as JSON writes it), with their numbers (from 1)."""
+    data = load_json(path, "AIS")  # size, UTF-8, nesting, no NaN: checked before any work
     reports = data.get("reports") if isinstance(data, dict) else data
     if not isinstance(reports, list) or not all(isinstance(r, dict) for r in reports):
         raise InputError(str(path), "a JSON list of report objects (or an object whose 'reports' is one)")
-    return [{k: v if isinstance(v, str) else json.dumps(v) for k, v in r.items()} for r in reports]
+    if len(reports) > MAX_AIS_REPORTS:
+        raise InputError(str(path), f"an AIS file of at most {MAX_AIS_REPORTS} reports (MAX_AIS_REPORTS)",
+                         len(reports))
+    for n, r in enumerate(reports, start=1):
+        yield n, {k: v if isinstance(v, str) else json.dumps(v) for k, v in r.items()}
 
 
 def load_ais_csv(path) -> dict[str, np.ndarray]:
@@ -114,6 +116,11 @@ def load_ais_csv(path) -> dict[str, np.ndarray]:
     A file ending in ``.json`` is read as a list of report objects with the same keys as the CSV columns
     (``[{"mmsi": 999000001, "time": "2026-05-04T10:00:00", "lat": 57.9, "lon": 10.2}, ...]``, or an object whose
     ``reports`` is that list).
+
+    The file is read as a stream and each report kept as three numbers: at most
+    :data:`~mmg_casadi.readers.MAX_AIS_REPORTS` reports and :data:`~mmg_casadi.readers.MAX_BYTES` ``["AIS"]``
+    bytes are read (a larger file is refused as soon as it passes the limit), so memory stays near 24 bytes a
+    report. An MMSI is a name (:func:`~mmg_casadi.readers.check_name`).
 
     Parameters
     ----------
@@ -128,29 +135,24 @@ def load_ais_csv(path) -> dict[str, np.ndarray]:
     Raises
     ------
     InputError
-        A missing file, a missing column, or a bad value (``<file> row <n>.<column>``).
+        A missing, too large or malformed file, a missing column, or a bad value (``<file> row <n>.<column>``).
     """
     path = Path(path)
     is_json = path.suffix.lower() == ".json"
-    if is_json:
-        rows = _json_rows(path)
-    else:
-        try:
-            with path.open(newline="", encoding="utf-8") as f:
-                rows = list(csv.DictReader(f))
-        except (OSError, UnicodeDecodeError, csv.Error) as err:
-            raise InputError(str(path), "an existing, readable CSV file of AIS reports (UTF-8)", str(err)) from None
-    if not rows:
-        raise InputError(str(path), f"a file with the columns ({', '.join(COLUMNS)}) and at least one report")
-    missing = [c for c in COLUMNS if c not in rows[0]]
-    if missing:
-        raise InputError(str(path), f"the columns {', '.join(COLUMNS)} (missing: {', '.join(missing)})")
-    ships: dict[str, dict[float, tuple[float, float]]] = {}
-    for n, r in enumerate(rows, start=1 if is_json else 2):
+    rows = _json_rows(path) if is_json else csv_rows(path, "AIS", max_rows=MAX_AIS_REPORTS)
+    ships: dict[str, array] = {}
+    first = True
+    for n, r in rows:
+        if first:
+            missing = [c for c in COLUMNS if c not in r]
+            if missing:
+                raise InputError(str(path), f"the columns {', '.join(COLUMNS)} (missing: {', '.join(missing)})")
+            first = False
         key = f"{path.name} {'report' if is_json else 'row'} {n}"
         mmsi = (r.get("mmsi") or "").strip()
         if not mmsi:
             raise InputError(f"{key}.mmsi", "a ship identifier (MMSI)", r.get("mmsi"))
+        check_name(mmsi, f"{key}.mmsi")
         t = _time(r.get("time") or "", f"{key}.time")
         pos = []
         for col, bound in (("lat", 90.0), ("lon", 180.0)):
@@ -161,8 +163,17 @@ def load_ais_csv(path) -> dict[str, np.ndarray]:
             if not -bound <= v <= bound:
                 raise InputError(f"{key}.{col}", f"degrees in [-{bound:g}, {bound:g}]", r.get(col))
             pos.append(v)
-        ships.setdefault(mmsi, {})[t] = (pos[0], pos[1])
-    return {m: np.array([[t, *p] for t, p in sorted(reports.items())]) for m, reports in ships.items()}
+        ships.setdefault(mmsi, array("d")).extend((t, pos[0], pos[1]))
+    if first:
+        raise InputError(str(path), f"a file with the columns ({', '.join(COLUMNS)}) and at least one report")
+    out = {}
+    for m, flat in ships.items():
+        reports = np.frombuffer(flat, dtype=float).reshape(-1, 3)
+        order = np.argsort(reports[:, 0], kind="stable")  # equal times keep the file's order: the last one wins
+        times = reports[order, 0]
+        last = np.append(times[1:] != times[:-1], True)
+        out[m] = reports[order[last]].copy()
+    return out
 
 
 def _resample(track: np.ndarray, t0: float, t1: float, step: float) -> np.ndarray:

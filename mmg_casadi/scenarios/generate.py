@@ -87,6 +87,7 @@ from scipy.optimize import brentq
 from mmg_casadi.colregs.profiles import SCORING_PROFILES, scoring_profile
 from mmg_casadi.colregs.scorer import score_encounters
 from mmg_casadi.errors import InputError, ScenarioError
+from mmg_casadi.readers import is_finite, load_json
 from mmg_casadi.guidance import methods as registry
 from mmg_casadi.io import read_toml, write_text
 from mmg_casadi.params import check_value
@@ -271,7 +272,7 @@ class EncounterSet:
 
 
 def _number(value, key: str, allowed: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if not is_finite(value):
         raise InputError(key, allowed, value)
     return float(value)
 
@@ -819,10 +820,10 @@ def requested_types(set_dir) -> dict[str, list[str]]:
     path = Path(set_dir) / "generation.json"
     if not path.is_file():
         return {}
+    record = load_json(path, "generation record")  # size, UTF-8, nesting checked while reading
     try:
-        record = json.loads(path.read_text(encoding="utf-8"))
         return {s["id"]: [t["type"] for t in s["targets"]] for s in record["situations"]}
-    except (OSError, ValueError, KeyError, TypeError) as err:
+    except (KeyError, TypeError) as err:
         raise InputError(str(path), "the generation.json written by `mmg-casadi generate`", str(err)) from None
 
 

@@ -303,7 +303,8 @@ def read_header(text: str):
     -------
     (float, float, float) or None
         Reference latitude and longitude [deg] and the length unit [m]; None if there is no header line or
-        one of its numbers is not a finite float.
+        one of its numbers is not a finite float in its range (latitude [-90, 90], longitude [-180, 180], length
+        (0, 1000] m).
 
     Examples
     --------
@@ -317,4 +318,6 @@ def read_header(text: str):
         values = tuple(float(v) for v in m.groups())
     except ValueError:
         return None
-    return values if all(math.isfinite(v) for v in values) else None
+    lat, lon, length = values
+    ok = all(math.isfinite(v) for v in values) and abs(lat) <= 90.0 and abs(lon) <= 180.0 and 0.0 < length <= 1000.0
+    return values if ok else None

@@ -36,11 +36,11 @@ Examples
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 from mmg_casadi.errors import ScenarioError
+from mmg_casadi.readers import finite, load_json
 from mmg_casadi.scenarios.geodesy import LocalPlane
 
 CHART_KEYS = ("land_file", "origin", "length_m")
@@ -66,15 +66,7 @@ def read_geojson(path, field: str) -> dict:
     dict
         The parsed object.
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise ScenarioError(field, "an existing, readable GeoJSON file", f"{path} ({err.strerror or err})") from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise ScenarioError(field, "a GeoJSON file (valid JSON)", f"{path}: {err.msg} at line {err.lineno}") from None
+    data = load_json(path, "GeoJSON", field, ScenarioError)  # size, UTF-8, nesting, no NaN: before any work
     if not isinstance(data, dict):
         raise ScenarioError(field, "a GeoJSON object (FeatureCollection, Feature or geometry)", type(data).__name__)
     return data
@@ -98,10 +90,7 @@ def _geometries(data: dict, where: str):
 
 
 def _number(value, field: str, low: float, high: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-            or not low <= value <= high:
-        raise ScenarioError(field, f"a number in [{low:g}, {high:g}] (deg)", value)
-    return float(value)
+    return finite(value, field, low, high, ScenarioError, unit="(deg)")
 
 
 def _ring(ring, field: str, plane: LocalPlane, unit: float) -> list[tuple[float, float]]:

@@ -49,7 +49,6 @@ target (all ships on straight courses at their initial speeds), so every encount
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -59,6 +58,7 @@ import numpy as np
 from mmg_casadi.errors import ScenarioError
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
 from mmg_casadi.guidance.methods import NAMES as METHODS
+from mmg_casadi.readers import is_finite, load_json
 from mmg_casadi.scenarios.geodesy import LocalPlane, initial_azimuth
 from mmg_casadi.scenarios.geojson_land import land_polygons, read_geojson
 from mmg_casadi.scenarios.scenario import SPEED_RANGE, Scenario, check_metadata, scenario_from_dict
@@ -119,7 +119,7 @@ def check_number(value, field: str, low=None, high=None, unit: str = "") -> floa
     ...
     mmg_casadi.errors.ScenarioError: ownShip.initial.sog: expected a number in [0, inf] kn, got True
     """
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    ok = is_finite(value)
     if ok and (low is None or value >= low) and (high is None or value <= high):
         return float(value)
     lo = "-inf" if low is None else f"{low:g}"
@@ -324,7 +324,7 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
             raise ScenarioError(name, f"one of: {', '.join(METHODS)}", value)
     if length_scale not in LENGTH_SCALES:
         raise ScenarioError("length_scale", f"one of: {', '.join(LENGTH_SCALES)}", length_scale)
-    if not (isinstance(extend_past, (int, float)) and math.isfinite(extend_past) and extend_past >= 0):
+    if not (is_finite(extend_past) and extend_past >= 0):
         raise ScenarioError("extend_past", "a number >= 0 (ship lengths)", extend_past)
     try:
         if not isinstance(data, dict):
@@ -486,16 +486,7 @@ def load_traffic_situation(path, **kw) -> tuple[Scenario, LocalPlane, float]:
     (3, 230.0)
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise ScenarioError(str(path), "an existing, readable JSON file", err.strerror or str(err)) from None
-    except UnicodeDecodeError as err:
-        raise ScenarioError("json", f"UTF-8 text in {path}", str(err)) from None
-    try:
-        data = json.loads(text)
-    except (ValueError, RecursionError) as err:
-        raise ScenarioError("json", f"valid JSON in {path}", str(err)) from None
+    data = load_json(path, "traffic situation", "json", ScenarioError)  # size, UTF-8, nesting, no NaN
     chart = path.with_suffix(".geojson")
     if chart.is_file():
         kw = {**kw, "land": read_geojson(chart, str(chart)), "land_source": chart.name}

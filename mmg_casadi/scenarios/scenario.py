@@ -63,22 +63,23 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import datetime
-import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import tomli_w
 
 from mmg_casadi.vessel.library import VESSELS, pair_collision_distance, ship_size
 from mmg_casadi.guidance import methods
-from mmg_casadi.errors import ParameterError, ScenarioError, check_range
+from mmg_casadi.errors import ParameterError, ScenarioError
 from mmg_casadi.io import read_toml
+from mmg_casadi.limits import MAX_COORDINATE
 from mmg_casadi.scenarios.geodesy import read_header
 from mmg_casadi.scenarios.geojson_land import chart_land
+from mmg_casadi.scenarios.scenario_checks import (_POINT, _as_point, _as_points, _name, _point, _points,
+                                                 _range_text, _ranged, _required, _string, _table, _tables,
+                                                 check_metadata, toml_key, valid_polygon)
+from mmg_casadi.scenarios.scenario_write import dump_scenario, scenario_to_dict  # noqa: F401  (re-exported)
 from mmg_casadi.scenarios.tracks import Track, parse_track
 from mmg_casadi.params import PARAMETERS, check_value, resolve
 
@@ -102,19 +103,6 @@ ENVIRONMENT_KEYS = {"current_speed": "current_speed", "current_direction": "curr
 SPEED_RANGE = (0.2, 1.2)
 """Allowed ``speed`` of a ship (``[[ships]]`` table), (low, high) as fractions of the design speed, inclusive."""
 SHIP_HALF_LENGTH = 0.5
-
-_POINT = "a point [x, y] of two finite numbers (ship lengths)"
-
-
-def _as_point(p) -> tuple[float, float]:
-    """``p`` as a tuple of two floats."""
-    return (float(p[0]), float(p[1]))
-
-
-def _as_points(ps) -> tuple[tuple[float, float], ...]:
-    """``ps`` as a tuple of points."""
-    return tuple(_as_point(p) for p in ps)
-
 
 @dataclass(frozen=True)
 class Settings:
@@ -420,121 +408,6 @@ class Scenario:
         return self.settings.method if own is None else own
 
 
-def toml_key(k: str) -> str:
-    r"""``k`` as written in a dotted TOML key: bare if it may be, else a quoted string (so it fits on one line).
-
-    Parameters
-    ----------
-    k : str
-        One key (one part of a dotted key). It stays bare if it is non-empty and only ASCII letters, digits,
-        ``_`` and ``-``; otherwise it becomes a JSON-escaped (hence valid TOML basic) string in double quotes.
-
-    Returns
-    -------
-    str
-        The key as TOML text.
-
-    Examples
-    --------
-    >>> toml_key("speed"), toml_key(""), toml_key("a\nb")
-    ('speed', '""', '"a\\nb"')
-    """
-    if k and all(c.isascii() and (c.isalnum() or c in "_-") for c in k):
-        return k
-    return json.dumps(k)
-
-
-def _table(value, key: str, allowed_keys) -> dict:
-    """``value`` as a table whose keys all lie in ``allowed_keys`` (``key`` is its dotted name, "" for the root)."""
-    if not isinstance(value, dict):
-        raise ScenarioError(key or "scenario", "a table", value)
-    for k in value:
-        if k not in allowed_keys:
-            name = toml_key(k)
-            raise ScenarioError(f"{key}.{name}" if key else name, f"a known key (one of: {', '.join(allowed_keys)})")
-    return value
-
-
-def _tables(d: dict, key: str, allowed_keys, *, required: bool) -> list[dict]:
-    """The array of tables ``d[key]`` (empty if absent and not ``required``)."""
-    if key not in d:
-        if required:
-            raise ScenarioError(key, f"at least one [[{key}]] table (required)")
-        return []
-    value = d[key]
-    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
-        raise ScenarioError(key, f"an array of tables [[{key}]]", value)
-    if required and not value:
-        raise ScenarioError(key, f"at least one [[{key}]] table (required)", value)
-    return [_table(v, f"{key}[{i}]", allowed_keys) for i, v in enumerate(value)]
-
-
-def _required(d: dict, key: str, prefix: str, allowed: str):
-    """``d[key]``, or a ScenarioError naming ``prefix.key`` if it is missing."""
-    if key not in d:
-        raise ScenarioError(f"{prefix}.{key}", f"{allowed} (a required key, missing here)")
-    return d[key]
-
-
-def _is_number(value) -> bool:
-    """True for a finite int or float (not a bool; an int too large for a float is not finite)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return False
-    try:
-        return math.isfinite(value)
-    except OverflowError:
-        return False
-
-
-def _number(value, key: str, allowed: str = "a finite number") -> float:
-    """``value`` as a float if it is a finite number."""
-    if not _is_number(value):
-        raise ScenarioError(key, allowed, value)
-    return float(value)
-
-
-def _range_text(key: str, low, high, **kw) -> str:
-    """The ``allowed`` text :func:`check_range` gives for this interval."""
-    try:
-        check_range(key, math.nan, low, high, cls=ScenarioError, **kw)
-    except ScenarioError as err:
-        return err.allowed
-    raise AssertionError("check_range accepted nan")
-
-
-def _ranged(value, key: str, low=None, high=None, **kw) -> float:
-    """``value`` as a float if it is a finite number (not a bool or a string) in the given interval."""
-    if not _is_number(value):
-        raise ScenarioError(key, _range_text(key, low, high, **kw), value)
-    return check_range(key, value, low, high, cls=ScenarioError, **kw)
-
-
-def _string(value, key: str, allowed=None) -> str:
-    """``value`` if it is a (non-empty) string, optionally one of ``allowed``."""
-    if allowed is not None:
-        if not isinstance(value, str) or value not in allowed:
-            raise ScenarioError(key, f"one of: {', '.join(allowed)}", value)
-        return value
-    if not isinstance(value, str) or not value:
-        raise ScenarioError(key, "a non-empty string", value)
-    return value
-
-
-def _point(value, key: str) -> tuple[float, float]:
-    """``value`` as a point: a list of two finite numbers."""
-    if not isinstance(value, (list, tuple)) or len(value) != 2 or not all(_is_number(v) for v in value):
-        raise ScenarioError(key, _POINT, value)
-    return _as_point(value)
-
-
-def _points(value, key: str, min_count: int) -> tuple[tuple[float, float], ...]:
-    """``value`` as a tuple of at least ``min_count`` points."""
-    if not isinstance(value, (list, tuple)) or len(value) < min_count:
-        noun = "point" if min_count == 1 else "points"
-        raise ScenarioError(key, f"a list of at least {min_count} {noun} [[x, y], ...] (ship lengths)", value)
-    return tuple(_point(p, f"{key}[{j}]") for j, p in enumerate(value))
-
-
 def _settings(d: dict) -> Settings:
     """Validated [settings] table (every parameter range-checked against the table)."""
     if "settings" not in d:
@@ -563,76 +436,15 @@ def _environment(d: dict, settings: dict) -> dict:
     return out
 
 
-_METADATA = "a string, a finite number, true or false, an array or a table of these (values with a JSON form)"
-_INT64 = (-(2 ** 63), 2 ** 63 - 1)
-
-
-def check_metadata(value, key: str, *, drop_nulls: bool = False) -> dict:
-    """``value`` as a metadata table: nested tables and arrays of strings, finite numbers and booleans.
-
-    The values that both a scenario file (TOML) and a traffic situation (JSON) can hold: no null, datetime or
-    non-finite number, integers in the 64-bit range of TOML.
-
-    Parameters
-    ----------
-    value : dict
-        The table to check (a :attr:`ShipSpec.metadata`).
-    key : str
-        Dotted name of the table, e.g. ``"ships[1].metadata"``; an error names the offending entry under it.
-    drop_nulls : bool, optional
-        Leave out table entries whose value is None (JSON null) instead of refusing them.
-
-    Returns
-    -------
-    dict
-        A deep copy of ``value``.
-
-    Examples
-    --------
-    >>> check_metadata({"mmsi": 257000123, "dimensions": {"height": 8.0}}, "ships[0].metadata")
-    {'mmsi': 257000123, 'dimensions': {'height': 8.0}}
-    >>> check_metadata({"sogMax": float("nan")}, "ships[0].metadata")
-    Traceback (most recent call last):
-    ...
-    mmg_casadi.errors.ScenarioError: ships[0].metadata.sogMax: expected a string, a finite number, true or false, an array or a table of these (values with a JSON form), got nan
-    """
-    def plain(v, k):
-        if isinstance(v, dict):
-            out = {}
-            for name, item in v.items():
-                if not isinstance(name, str):
-                    raise ScenarioError(k, "a table with string keys", name)
-                if item is not None or not drop_nulls:
-                    out[name] = plain(item, f"{k}.{toml_key(name)}")
-            return out
-        if isinstance(v, list):
-            return [plain(item, f"{k}[{j}]") for j, item in enumerate(v)]
-        if isinstance(v, (str, bool)):
-            return v
-        if isinstance(v, int) and _INT64[0] <= v <= _INT64[1]:
-            return v
-        if isinstance(v, float) and math.isfinite(v):
-            return v
-        shown = v.isoformat() if isinstance(v, (datetime.date, datetime.time)) else v
-        raise ScenarioError(k, _METADATA, shown)
-
-    if not isinstance(value, dict):
-        raise ScenarioError(key, "a table of static data", value)
-    try:
-        return plain(value, key)
-    except RecursionError:
-        raise ScenarioError(key, "tables and arrays nested less deeply (Python's recursion limit)") from None
-
-
 def _ship(t: dict, i: int, base_dir=None) -> ShipSpec:
     """Validated ``ships[i]`` table (a replayed ship's track file relative to ``base_dir``)."""
     if "track" in t:
         return _replayed_ship(t, i, base_dir)
     p = f"ships[{i}]"
-    name = _string(t["name"], f"{p}.name") if "name" in t else f"ship{i}"
+    name = _name(t["name"], f"{p}.name") if "name" in t else f"ship{i}"
     start = _point(_required(t, "start", p, _POINT), f"{p}.start")
-    heading = _number(_required(t, "heading", p, "a finite number of degrees"), f"{p}.heading",
-                      "a finite number of degrees")
+    heading = _ranged(_required(t, "heading", p, "a number in [-360, 360] degrees"), f"{p}.heading", -360.0, 360.0,
+                      unit="degrees")
     lo, hi = SPEED_RANGE
     unit = "(fraction of design speed)"
     speed = _ranged(_required(t, "speed", p, _range_text(f"{p}.speed", lo, hi, unit=unit)), f"{p}.speed", lo, hi,
@@ -649,8 +461,7 @@ def _ship(t: dict, i: int, base_dir=None) -> ShipSpec:
         if not isinstance(t["speeds"], list) or len(t["speeds"]) != len(waypoints):
             raise ScenarioError(f"{p}.speeds", allowed, t["speeds"])
         speeds = tuple(_ranged(v, f"{p}.speeds[{k}]", lo, hi, unit=unit) for k, v in enumerate(t["speeds"]))
-    size = {k: _ranged(t[k], f"{p}.{k}", 0.0, None, low_open=True, unit="m") for k in ("length_m", "beam_m")
-            if k in t}
+    size = _size(t, p)
     metadata = check_metadata(t["metadata"], f"{p}.metadata") if "metadata" in t else {}
     return ShipSpec(name, start, heading, speed, waypoints, method, stays, vessel, speeds, metadata=metadata,
                     **size)
@@ -667,17 +478,26 @@ def _replayed_ship(t: dict, i: int, base_dir=None) -> ShipSpec:
             raise ScenarioError(f"{p}.{toml_key(k)}", f"a key of a replayed ship (one of: {', '.join(REPLAY_KEYS)}; "
                                 "the track gives its start, heading, speed and goal)")
     track = parse_track(t["track"], f"{p}.track", base_dir)
-    name = _string(t["name"], f"{p}.name") if "name" in t else f"ship{i}"
+    name = _name(t["name"], f"{p}.name") if "name" in t else f"ship{i}"
     stays = t.get("stays", False)
     if not isinstance(stays, bool):
         raise ScenarioError(f"{p}.stays", "true or false", stays)
     vessel = _string(t["vessel"], f"{p}.vessel", VESSELS) if "vessel" in t else None
-    size = {k: _ranged(t[k], f"{p}.{k}", 0.0, None, low_open=True, unit="m") for k in ("length_m", "beam_m")
-            if k in t}
+    size = _size(t, p)
     metadata = check_metadata(t["metadata"], f"{p}.metadata") if "metadata" in t else {}
     end = (track.x[-1], track.y[-1])
     return ShipSpec(name, tuple(track.position(0.0)), math.degrees(track.heading(0.0)), track.speed(0.0), (end,),
                     None, stays, vessel, None, metadata=metadata, track=track, **size)
+
+
+SIZE_RANGE_M = {"length_m": 1000.0, "beam_m": 200.0}
+"""Largest ``length_m`` and ``beam_m`` of a ship [m] (the largest ships afloat are under 460 m by 70 m)."""
+
+
+def _size(t: dict, p: str) -> dict:
+    """The ship's own ``length_m`` and ``beam_m``, each in (0, :data:`SIZE_RANGE_M`] m."""
+    return {k: _ranged(t[k], f"{p}.{k}", 0.0, hi, low_open=True, unit="m") for k, hi in SIZE_RANGE_M.items()
+            if k in t}
 
 
 def _obstacle(t: dict, i: int) -> ObstacleSpec:
@@ -686,7 +506,7 @@ def _obstacle(t: dict, i: int) -> ObstacleSpec:
     position = _point(_required(t, "position", p, _POINT), f"{p}.position")
     if "radius" not in t:
         return ObstacleSpec(position)
-    return ObstacleSpec(position, _ranged(t["radius"], f"{p}.radius", 0.0, None, low_open=True, unit="L"))
+    return ObstacleSpec(position, _ranged(t["radius"], f"{p}.radius", 0.0, MAX_COORDINATE, low_open=True, unit="L"))
 
 
 def _wall(t: dict, i: int) -> WallSpec:
@@ -710,6 +530,7 @@ def _land(t: dict, i: int) -> LandSpec:
     if abs(area) < 1e-9:
         raise ScenarioError(key, "a polygon with a non-zero area (not all points on one line)",
                             [list(p) for p in points])
+    valid_polygon(points, key)
     return LandSpec(points)
 
 
@@ -892,111 +713,3 @@ def with_params(s: Scenario, params: dict | None) -> Scenario:
     kw = {k: values.pop(k) for k in SETTINGS_FIELDS if k in values}
     settings = dataclasses.replace(s.settings, params={**s.settings.params, **values}, **kw)
     return dataclasses.replace(s, settings=settings)
-
-
-def _ship_dict(ship: ShipSpec) -> dict:
-    """One ship as a scenario-file table (a replayed ship with its track inline)."""
-    if ship.track is not None:
-        d = {"name": ship.name, "track": ship.track.to_dict(), "stays": ship.stays}
-        d.update({k: getattr(ship, k) for k in ("vessel", "length_m", "beam_m") if getattr(ship, k) is not None})
-        if ship.metadata:
-            d["metadata"] = copy.deepcopy(ship.metadata)
-        return d
-    d = {"name": ship.name, "start": list(ship.start), "heading": ship.heading_deg, "speed": ship.speed,
-         "waypoints": [list(p) for p in ship.waypoints]}
-    if ship.method is not None:
-        d["method"] = ship.method
-    d["stays"] = ship.stays
-    if ship.vessel is not None:
-        d["vessel"] = ship.vessel
-    if ship.speeds is not None:
-        d["speeds"] = list(ship.speeds)
-    for k in ("length_m", "beam_m"):
-        if getattr(ship, k) is not None:
-            d[k] = getattr(ship, k)
-    if ship.metadata:
-        d["metadata"] = copy.deepcopy(ship.metadata)
-    return d
-
-
-def scenario_to_dict(s: Scenario) -> dict:
-    """``s`` as a dict shaped like a scenario file (the inverse of :func:`scenario_from_dict`).
-
-    Parameters
-    ----------
-    s : Scenario
-        The scenario to convert.
-
-    Returns
-    -------
-    dict
-        ``settings``, ``ships``, ``obstacles``, ``walls`` and ``land`` as plain lists, dicts and numbers.
-
-    Examples
-    --------
-    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
-    >>> scenario_to_dict(s)["ships"][0]["waypoints"]
-    [[50.0, 0.0]]
-    >>> scenario_from_dict(scenario_to_dict(s)) == s
-    True
-    """
-    st = s.settings
-    settings = {"method": st.method, "dt": st.dt, "t_max": st.t_max, "r_safe": st.r_safe,
-                "collision_distance": st.collision_distance, "goal_tolerance": st.goal_tolerance}
-    settings.update({k: st.params[k] for k in PARAM_KEYS if k in st.params})
-    return {
-        "settings": settings,
-        "ships": [_ship_dict(ship) for ship in s.ships],
-        "obstacles": [{"position": list(ob.position), "radius": ob.radius} for ob in s.obstacles],
-        "walls": [{"points": [list(p) for p in w.points]} for w in s.walls],
-        "land": [{"points": [list(p) for p in a.points]} for a in s.land],
-    }
-
-
-def dump_scenario(s: Scenario) -> str:
-    """``s`` as scenario-file TOML text; ``scenario_from_dict(tomllib.loads(dump_scenario(s))) == s``.
-
-    :func:`scenario_to_dict` without its empty ``obstacles``, ``walls`` and ``land``, written by ``tomli_w.dumps``.
-
-    Parameters
-    ----------
-    s : Scenario
-        The scenario to write.
-
-    Returns
-    -------
-    str
-        TOML text of a scenario file.
-
-    Examples
-    --------
-    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
-    >>> print(dump_scenario(s))
-    [settings]
-    method = "none"
-    dt = 0.25
-    t_max = 300.0
-    r_safe = 15.0
-    collision_distance = 2.0
-    goal_tolerance = 3.0
-    <BLANKLINE>
-    [[ships]]
-    name = "own"
-    start = [
-        0.0,
-        0.0,
-    ]
-    heading = 0.0
-    speed = 1.0
-    waypoints = [
-        [
-            50.0,
-            0.0,
-        ],
-    ]
-    stays = false
-    <BLANKLINE>
-    >>> scenario_from_dict(tomllib.loads(dump_scenario(s))) == s
-    True
-    """
-    return tomli_w.dumps({k: v for k, v in scenario_to_dict(s).items() if v})

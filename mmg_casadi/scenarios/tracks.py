@@ -20,7 +20,6 @@ most :data:`MAX_TRACK_SPEED` (a larger one is a bad record).
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,11 +28,15 @@ import numpy as np
 
 from mmg_casadi.closed_loop.replay import sample_track, track_heading
 from mmg_casadi.errors import ScenarioError
+from mmg_casadi.limits import MAX_COORDINATE
+from mmg_casadi.readers import csv_rows
 
 TRACK_COLUMNS = ("t", "x", "y")
 """Columns (keys) of a track: time (L/U), position x and y (L)."""
 MAX_TRACK_POINTS = 20_000
 """Largest number of samples of one track."""
+MIN_TRACK_STEP = 1e-6
+"""Smallest time between two samples of a track [L/U] (a closer pair makes no speed: 0/0)."""
 MAX_TRACK_SPEED = 3.0
 """Largest speed between two samples (U, the model envelope's speed): a faster jump is a bad record."""
 _ALLOWED = ('a CSV file name (columns t, x, y) or a table {t = [...], x = [...], y = [...]} of 2 to '
@@ -139,28 +142,31 @@ class Track:
 
 
 def _read_csv(path: Path, key: str) -> dict:
-    """The columns t, x, y of a track CSV file as lists of strings."""
-    try:
-        with path.open(newline="", encoding="utf-8") as f:
-            rows = list(csv.DictReader(f))
-    except (OSError, UnicodeDecodeError, csv.Error) as err:
-        raise ScenarioError(key, "an existing, readable CSV file (UTF-8) with the columns t, x, y",
-                            f"{path}: {err}") from None
-    if not rows or any(c not in rows[0] for c in TRACK_COLUMNS):
+    """The columns t, x, y of a track CSV file as lists of strings (streamed: at most :data:`MAX_TRACK_POINTS` rows
+    and :data:`~mmg_casadi.readers.MAX_BYTES` ``["track"]`` bytes are read, only these columns kept)."""
+    cols: dict[str, list] = {c: [] for c in TRACK_COLUMNS}
+    for _line, row in csv_rows(path, "track", max_rows=MAX_TRACK_POINTS, field=key, cls=ScenarioError):
+        if any(c not in row for c in TRACK_COLUMNS):
+            break
+        for c in TRACK_COLUMNS:
+            cols[c].append(row[c])
+    if not cols["t"]:
         raise ScenarioError(key, "a CSV file with the columns t, x, y and at least two rows", str(path))
-    return {c: [r[c] for r in rows] for c in TRACK_COLUMNS}
+    return cols
 
 
 def _number(value, key: str) -> float:
-    """``value`` (a number or a numeric string of a CSV file) as a finite float."""
+    """``value`` (a number or a numeric string of a CSV file) as a finite float of magnitude at most
+    :data:`~mmg_casadi.limits.MAX_COORDINATE` (ship lengths for a position, L/U for a time)."""
+    allowed = f"a finite number in [-{MAX_COORDINATE:g}, {MAX_COORDINATE:g}]"
     if isinstance(value, bool):
-        raise ScenarioError(key, "a finite number", value)
+        raise ScenarioError(key, allowed, value)
     try:
         v = float(value)
-    except (TypeError, ValueError):
-        raise ScenarioError(key, "a finite number", value) from None
-    if not math.isfinite(v):
-        raise ScenarioError(key, "a finite number", value)
+    except (TypeError, ValueError, OverflowError):
+        raise ScenarioError(key, allowed, value) from None
+    if not math.isfinite(v) or abs(v) > MAX_COORDINATE:
+        raise ScenarioError(key, allowed, value)
     return v
 
 
@@ -222,11 +228,11 @@ def parse_track(value, key: str, base_dir=None) -> Track:
 
     data = {c: [_number(v, field(c, k)) for k, v in enumerate(cols[c])] for c in TRACK_COLUMNS}
     t = np.asarray(data["t"])
-    bad = np.flatnonzero(np.diff(t) <= 0)
+    bad = np.flatnonzero(np.diff(t) < MIN_TRACK_STEP)
     if bad.size:
         k = int(bad[0]) + 1
-        raise ScenarioError(field("t", k), f"a time after the previous one, {t[k - 1]:g} (strictly increasing)",
-                            float(t[k]))
+        raise ScenarioError(field("t", k), f"a time at least {MIN_TRACK_STEP:g} after the previous one, {t[k - 1]:g} "
+                            "(strictly increasing)", float(t[k]))
     if t[0] > 0:
         raise ScenarioError(field("t", 0), "a first time at or before the scenario's start, 0", float(t[0]))
     if t[-1] <= 0:

@@ -27,7 +27,9 @@ from importlib import resources
 from pathlib import Path
 
 from mmg_casadi.errors import InputError
-from mmg_casadi.vessel.ship import (ShipParams, SteeringParams, load_kcs, load_steering, ship_from_table,
+from mmg_casadi.readers import load_toml
+from mmg_casadi.vessel.vessel_file import check_vessel_data
+from mmg_casadi.vessel.ship import (COEFFICIENTS, ShipParams, SteeringParams, load_kcs, load_steering, ship_from_table,
                                     steering_from_table)
 
 DEFAULT = "kcs"
@@ -162,14 +164,12 @@ def load_vessel(name: str | Path = DEFAULT, field: str = "vessel") -> Vessel:
     path = Path(name) if isinstance(name, (str, Path)) else None
     if path is None or path.suffix.lower() != ".toml" or not path.is_file():
         raise InputError(field, f"one of: {', '.join(VESSELS)} (or a vessel .toml file)", name)
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, RecursionError) as e:  # RecursionError: nested too deep
-        raise InputError(field, "a readable vessel TOML file", f"{path} ({e})") from None
+    raw = load_toml(path, "vessel", field)  # size, UTF-8 and nesting checked while reading
     return _vessel_from(path.stem, raw, str(path))
 
 
 def _vessel_from(name: str, raw: dict, where: str) -> Vessel:
+    check_vessel_data(raw, where, COEFFICIENTS)  # known tables and keys, sane particulars
     for block in ("ship", "mass", "hull", "propeller", "rudder", "steering"):
         if not isinstance(raw.get(block), dict):
             raise InputError(f"{where}: [{block}]", "a table of the vessel data format (see kcs_mmg.toml)")

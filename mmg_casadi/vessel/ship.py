@@ -14,6 +14,7 @@ from importlib import resources
 from pathlib import Path
 
 from mmg_casadi.errors import ParameterError
+from mmg_casadi.vessel.vessel_file import check_vessel_data
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -297,7 +298,10 @@ def _packaged_text() -> str:
 
 
 def _read_toml(path: str | Path | None) -> dict:
-    return tomllib.loads(_packaged_text() if path is None else Path(path).read_text())
+    if path is None:
+        return check_vessel_data(tomllib.loads(_packaged_text()), DATA_FILE, COEFFICIENTS)
+    from mmg_casadi.readers import load_toml  # size, UTF-8 and nesting checked while reading
+    return check_vessel_data(load_toml(path, "vessel", "vessel file", ParameterError), str(path), COEFFICIENTS)
 
 
 @lru_cache(maxsize=1)
@@ -305,6 +309,8 @@ def _packaged_kcs() -> ShipParams:
     return ship_from_table(_read_toml(None))
 
 
+COEFFICIENTS: tuple[str, ...] = tuple(f.name for f in fields(ShipParams) if f.name != "hull_form")
+"""Every coefficient and particular of :class:`ShipParams` (the keys a vessel data file's tables may hold)."""
 HULL_FORMS = ("beta", "yy2015")
 """Hull force models of :class:`ShipParams` (``hull_form``)."""
 

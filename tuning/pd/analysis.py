@@ -113,7 +113,10 @@ class StepResponse:
 
 
 def _step_metrics(t, psi, psi_d) -> dict:
-    info = ct.step_info(np.asarray(psi) / psi_d, timepts=t, final_output=1.0, SettlingTimeThreshold=SETTLING)
+    try:
+        info = ct.step_info(np.asarray(psi) / psi_d, timepts=t, final_output=1.0, SettlingTimeThreshold=SETTLING)
+    except IndexError:  # the heading never rises through python-control's rise-time band: no step metrics
+        return {"overshoot": math.nan, "settling_time": math.nan, "rise_time": math.nan}
     return {"overshoot": float(info["Overshoot"]), "settling_time": float(info["SettlingTime"]),
             "rise_time": float(info["RiseTime"])}
 
