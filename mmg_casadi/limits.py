@@ -30,6 +30,13 @@ its expression graph grows with the square of the fleet (``benchmarks/fleet_scal
 40 ships), so a larger ``fleet_from_ships`` than the scenario's size is refused above this."""
 MAX_OBSTACLES = 2000
 """Largest number of static obstacles of one scenario."""
+MAX_UNROLLED_OBSTACLE_PAIRS = 64
+"""Largest ``ships × obstacles`` of a scenario of the unrolled step: the unrolled step writes every ship–obstacle
+pair into its expression, so its compiler's time and memory grow with them (2 ships: 8 obstacles 5.7 s and
+84 MB, 32 obstacles 17 s and 187 MB, 500 obstacles over 10 minutes and 6 GB), while the fleet step sees
+obstacles through its neighbour slots and compiles in the same 6-13 s and 100-140 MB at 2000 obstacles. A
+scenario with more pairs runs the fleet step; every paper scenario and Monte Carlo environment (at most 10 ships
+× 4 obstacles) and every packaged one (2 × 16) stays unrolled."""
 MAX_COORDINATE = 10_000.0
 """Largest absolute coordinate of a position of a scenario [ship lengths]: 2300 km at the KCS's 230 m. The largest
 fleet the toolkit runs (``mmg-casadi traffic 2000``, environment 5's density) spans about 1400 L; the bound keeps

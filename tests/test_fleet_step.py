@@ -101,3 +101,64 @@ def test_a_fleet_rollout_has_the_unrolled_outcomes():
     for a, b in zip(ou, of):
         assert {k: v for k, v in a.items() if "min_distance" not in k} == \
             {k: v for k, v in b.items() if "min_distance" not in k}
+
+
+def _obstacle_field(n: int, ships: int = 2) -> dict:
+    """``ships`` ships passing each other in a lane kept free of ``n`` obstacles scattered around it."""
+    rng = np.random.default_rng(0)
+    obstacles = []
+    while len(obstacles) < n:
+        p = rng.uniform(-300, 300, 2)
+        if abs(p[1]) > 12 or not -10 <= p[0] <= 70:
+            obstacles.append({"position": [float(p[0]), float(p[1])]})
+    return {"settings": {"method": "modified-vortex", "t_max": 40.0},
+            "ships": [{"name": f"s{i}", "start": [60.0 * (i % 2), 5.0 * i], "heading": 180.0 * (i % 2),
+                       "speed": 1.0, "waypoints": [[60.0 * (1 - i % 2), 5.0 * i]]} for i in range(ships)],
+            "obstacles": obstacles}
+
+
+def test_obstacle_heavy_layouts_run_the_fleet_step_whose_code_does_not_grow_with_the_obstacles():
+    # the unrolled step writes every ship-obstacle pair: 2 ships with 500 obstacles made cc1 grow past 6 GB;
+    # beyond MAX_UNROLLED_OBSTACLE_PAIRS the obstacles reach a ship through the fleet step's slots
+    from mmg_casadi.compiled import generate_source
+    from mmg_casadi.limits import MAX_UNROLLED_OBSTACLE_PAIRS
+    few = build_problem(scenario_from_dict(_obstacle_field(MAX_UNROLLED_OBSTACLE_PAIRS // 2))).layout
+    many = [build_problem(scenario_from_dict(_obstacle_field(n))).layout for n in (100, 2000)]
+    assert few.neighbours == 0 and all(lay.neighbours == PARAMETERS["neighbour_slots"].default for lay in many)
+    sizes = [len(generate_source(build_fleet_step(lay))) for lay in many]
+    assert abs(sizes[1] - sizes[0]) < 0.01 * sizes[0], sizes  # the same code but for the obstacle count
+
+
+@pytest.mark.slow
+def test_two_ships_and_2000_obstacles_compile_and_run_within_60_s_and_1_gb(tmp_path):
+    # measured on the 2-core machine: 17 s and 229 MiB (whole process tree) with an empty cache
+    import os
+    import subprocess
+    import sys
+    import time
+    import tomli_w
+    scenario = tmp_path / "obstacles.toml"
+    scenario.write_text(tomli_w.dumps(_obstacle_field(2000)))
+    env = {**os.environ, "MMG_CASADI_CACHE": str(tmp_path / "cache")}
+    t0 = time.monotonic()
+    proc = subprocess.Popen([sys.executable, "-m", "mmg_casadi.cli", "simulate", str(scenario), "--out",
+                             str(tmp_path / "out")], env=env, stderr=subprocess.PIPE, text=True)
+    peak = 0
+    while proc.poll() is None:  # the whole tree's resident memory: the program, the watchdog and the compiler
+        peak = max(peak, _tree_rss(proc.pid))
+        time.sleep(0.05)
+    assert proc.returncode == 0, proc.stderr.read()
+    assert time.monotonic() - t0 < 60.0 and peak < 1 << 30, (time.monotonic() - t0, peak)
+
+
+def _tree_rss(root: int) -> int:
+    """Resident bytes of ``root`` and its descendants (from /proc)."""
+    import os
+    from mmg_casadi._watchdog import descendants
+    total = 0
+    for pid in descendants([root]):
+        try:
+            total += int(open(f"/proc/{pid}/statm").read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+        except OSError:
+            pass
+    return total

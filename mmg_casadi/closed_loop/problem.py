@@ -18,7 +18,7 @@ from mmg_casadi.closed_loop.simulation import compiled_step
 from mmg_casadi.closed_loop.step import build_closed_loop_step
 from mmg_casadi.errors import ParameterError, ScenarioError
 from mmg_casadi.guidance import methods
-from mmg_casadi.limits import check_size, check_steps, check_unrolled
+from mmg_casadi.limits import MAX_UNROLLED_OBSTACLE_PAIRS, check_size, check_steps, check_unrolled
 from mmg_casadi.params import resolve
 from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel, ship_size
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
@@ -239,14 +239,16 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
     vessels = tuple(getattr(s, "vessel", None) or resolved["vessel"] for s in sc.ships)
     for i, v in enumerate(vessels):
         load_vessel(v, f"ships[{i}].vessel")
+    fleet = (len(sc.ships) >= resolved["fleet_from_ships"]
+             or len(sc.ships) * len(sc.obstacles) > MAX_UNROLLED_OBSTACLE_PAIRS)  # obstacles seen through slots
     layout = Layout(methods=methods_, n_obstacles=len(sc.obstacles), n_walls=len(walls),
                     max_path=max(1 + len(s.waypoints) for s in sc.ships),
                     vo_candidates=resolved["vo_candidates"], vo_cone=resolved["vo_cone"],
                     disturbed=is_disturbed(resolved), vo_hold=resolved["vo_hold"],
                     vo_speed_levels=resolved["vo_speed_levels"],
                     vessels=() if set(vessels) == {DEFAULT_VESSEL} else vessels,
-                    neighbours=resolved["neighbour_slots"] if len(sc.ships) >= resolved["fleet_from_ships"] else 0,
-                    n_land=len(land), **_replay_layout(sc, replayed, resolved, error or ParameterError),
+                    neighbours=resolved["neighbour_slots"] if fleet else 0,
+                    n_land=len(land), **_replay_layout(sc, replayed, resolved, error or ParameterError, fleet),
                     cv_extremis="colregs-vortex" in methods_ and resolved["cv_speed_extremis"] > 0)
     model = ClosedLoopModel(layout, resolved)
     ships = tuple(_ship_inputs(_engine_speed(s), load_vessel(v).ship, v, unit=vessels[0])
@@ -256,10 +258,14 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
     return Problem(model, model.initial_state(list(ships)), model.pack(list(ships), obstacles, walls), ships)
 
 
-def _replay_layout(sc, replayed: tuple, resolved: dict, error) -> dict:
+def _replay_layout(sc, replayed: tuple, resolved: dict, error, fleet: bool = False) -> dict:
     """The :class:`Layout` fields of the replayed ships (none: no field, so the layout is as without them)."""
     if not replayed:
         return {}
+    if fleet and len(sc.ships) * len(sc.obstacles) > MAX_UNROLLED_OBSTACLE_PAIRS:
+        raise ScenarioError("obstacles", f"at most {MAX_UNROLLED_OBSTACLE_PAIRS // len(sc.ships)} obstacles for "
+                            f"{len(sc.ships)} ships with replayed ones (MAX_UNROLLED_OBSTACLE_PAIRS; more run the "
+                            "fleet step, which replays no track)", len(sc.obstacles))
     if len(sc.ships) >= resolved["fleet_from_ships"]:
         raise error("fleet_from_ships", f"more than the {len(sc.ships)} ships of a scenario with replayed ships "
                     "(the fleet step replays no track)", resolved["fleet_from_ships"])
