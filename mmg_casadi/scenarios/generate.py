@@ -82,7 +82,6 @@ from importlib import resources
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import brentq
 
 from mmg_casadi.colregs.profiles import SCORING_PROFILES, scoring_profile
 from mmg_casadi.colregs.scorer import score_encounters
@@ -547,6 +546,7 @@ def solve_target(own_course: float, own_speed: float, bearing: float, speed_rati
     top = (1.0 + speed_ratio) * own_speed * (1.0 + 1e-9)
     grid = np.linspace(top * 1e-6, top, 801)
     values = np.abs(velocity(grid)) - target
+    from scipy.optimize import brentq  # about 0.5 s to import: only when a situation is solved
     out = []
     for k in np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) <= 0):
         if values[k] == 0.0 and k > 0:  # found as the end of the previous interval
