@@ -40,7 +40,8 @@ from mmg_casadi.vessel.library import load_vessel, vessel_table
 from mmg_casadi.vessel.maneuvers import speed_change, turning_circle, validate_maneuver_args, zigzag
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
-STUDIES = QUICK_STUDIES + ("land", "imazu", "encounters", "disturbance", "statistics", "sweep", "paper", "all")
+STUDIES = QUICK_STUDIES + ("land", "imazu", "encounters", "disturbance", "statistics", "sweep", "labelled",
+                           "profiles", "paper", "all")
 _FLAGS = {"base_seed": "--seed", "out_dir": "--out", "n_candidates": "--candidates", "search_seed": "--search-seed",
           "failure_weight": "--failure-weight"}
 """Library argument names whose flag is not ``--`` + the name with dashes."""
@@ -163,15 +164,32 @@ def build_parser() -> argparse.ArgumentParser:
 
     sub.add_parser("scenarios", help="list the packaged scenarios (name, ships, method, description)")
 
+    ex = sub.add_parser("explain", help="re-run one run of a statistics study exactly and draw every COLREG "
+                        "encounter of its own ship, rule by rule")
+    ex.add_argument("study_dir", type=_path, metavar="STUDY_DIR", help="output directory of `study statistics`")
+    ex.add_argument("--run", type=_int, required=True, help="the run index")
+    ex.add_argument("--env", type=_int, default=None, help="its environment (only if the study has the run in "
+                    "more than one cell)")
+    ex.add_argument("--method", default=None, help="its method (only if the study has the run in more than one "
+                    "cell)")
+    ex.add_argument("--profile", default=None, help="scoring profile of the figures and explain.json (default: the "
+                    "study's colregs_profile)")
+    ex.add_argument("--out", type=_path, required=True, help="output directory")
+
     st = sub.add_parser("study", help="the paper's studies")
     studies = st.add_subparsers(dest="study", parser_class=_Parser, metavar="{" + ",".join(STUDIES) + "}")
     studies.required = True
     for name in STUDIES:
         sp = studies.add_parser(name, help={"all": "every quick study", "paper": "every study of the paper and "
-                                            "a claim-by-claim report"}.get(name, f"the {name} study"))
+                                            "a claim-by-claim report", "labelled": "the hand-labelled COLREG "
+                                            "cases under every scoring profile", "profiles": "one method's "
+                                            "compliance under each step from the laboratory profile to the "
+                                            "published one"}.get(name, f"the {name} study"))
         sp.add_argument("--out", type=_path, required=True, help="output directory")
-        _add_params(sp)
         _add_determinism(sp)
+        if name == "labelled":  # scripted cases at the table's defaults, judged under every profile
+            continue
+        _add_params(sp)
         if name not in ("waypoint-square", "all", "paper"):
             _add_methods(sp)
         if name == "paper":
@@ -211,6 +229,11 @@ def build_parser() -> argparse.ArgumentParser:
             sp.add_argument("--vessels", default=None, help="hulls of the sampled target ships: own (default, the "
                             "own ship's), a vessel name, or two separated by a comma that the targets take in turn, "
                             "e.g. kvlcc2,kcs (mixed traffic; same as --set target_vessels=VALUE)")
+        if name == "profiles":
+            sp.add_argument("--runs", type=_int, default=1000, help="runs (indices 0..N-1)")
+            sp.add_argument("--envs", default="5", help="the environment, e.g. 5")
+            sp.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
+            sp.add_argument("--workers", type=_int, default=None, help="local worker processes")
         if name == "sweep":
             sp.add_argument("--param", required=True, help="the swept parameter (see `mmg-casadi params`)")
             sp.add_argument("--values", required=True, help="comma-separated values, e.g. 10,15,20,25")
@@ -384,6 +407,9 @@ def _study(a) -> dict:
         target = a.out / n if a.study == "all" else a.out
         if a.study == "all":
             print(f"study {n} -> {target}", file=sys.stderr)
+        if n == "labelled":
+            out[n] = mod.run(target)
+            continue
         kw = {"params": params}
         if n != "waypoint-square" and getattr(a, "methods", None):
             kw["methods"] = a.methods
@@ -399,11 +425,32 @@ def _study(a) -> dict:
             kw.update(set_dir=a.set_dir, targets=a.targets)
         if n == "paper":
             kw.update(runs=a.runs, base_seed=a.seed, workers=a.workers)
+        if n == "profiles":
+            kw.update(runs=a.runs, envs=a.envs, base_seed=a.seed, workers=a.workers)
         if n == "sweep":
             kw.update(param=a.param, values=a.values, baseline=a.baseline, runs=a.runs, envs=a.envs,
                       base_seed=a.seed, workers=a.workers)
         out[n] = mod.run(target, **kw)
     return out
+
+
+def _explain(a) -> dict:
+    from mmg_casadi.colregs.profiles import scoring_profile
+    from mmg_casadi.montecarlo.explain import explain_run, write_explanation  # matplotlib only when drawing
+
+    profile = None if a.profile is None else scoring_profile(a.profile)  # checked before any work
+    ex = explain_run(a.study_dir, a.run, environment=a.env, method=a.method, profile=profile)
+    write_explanation(ex, a.out)
+    same = ex.reproduced
+    print(f"env {ex.environment} {ex.method} run {ex.run}: " + ("verdicts reproduced" if same and all(same.values())
+          else "no stored row" if not same else "VERDICTS DIFFER: " + ", ".join(c for c, ok in same.items() if not ok)),
+          file=sys.stderr)
+    for e in ex.encounters:
+        state = "unfinished" if e.unfinished else ("kept" if e.compliant else "broken: " + ", ".join(
+            r for r, v in e.rules.items() if not v.verdict))
+        print(f"  {e.other_name}: {e.role}, onset t = {e.onset['t']:.1f}, CPA {e.closest['range']:.2f} L, {state}",
+              file=sys.stderr)
+    return ex.to_dict()
 
 
 def _tune(a) -> dict:
@@ -578,7 +625,7 @@ def main(argv=None) -> int:
             _check_out(a)
             handlers = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
                         "convert": _convert, "traffic": _traffic, "generate": _generate, "replay": _replay,
-                        "params": _params,
+                        "params": _params, "explain": _explain,
                         "scenarios": _scenarios, "vessels": _vessels, "identify": _identify}
             handlers[a.command](a)
             if getattr(a, "check_determinism", False):

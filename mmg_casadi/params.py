@@ -243,7 +243,8 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "stand-on ship acts alone (Rule 17(a)(ii))", "Cockcroft & Lameijer, A Guide to the Collision Avoidance "
        "Rules, 7th ed., on Rule 17: in open sea a give-way ship that has not acted by about 2 nm in a crossing of "
        "two merchant ships has usually waited too long, i.e. when a substantial alteration no longer completes "
-       "well before the CPA; for the KCS a 60° alteration takes 3.7 L/U (≈ 75 s at 4 L/U)", "colregs-vortex",
+       "well before the CPA; for the KCS a 60° alteration takes 3.7 L/U (≈ 75 s at 4 L/U); the iitm-lab scoring "
+       "profile's late_tcpa has the same number, which this default does not read", "colregs-vortex",
        low_open=True),
     _P("cv_r_act", 8.0, 0.0, None, "L", "range below which the overtaken ship acts alone whatever the TCPA (slowly "
        "closing overtakers), and within which a stand-on ship keeping her course circles a static obstacle", "our choice: 4 collision distances", "colregs-vortex", low_open=True),
@@ -252,13 +253,16 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("cv_k_standon", 1.0, 0.0, None, "L/(L/U)", "strength of the stand-on escape term at the trigger",
        "our choice: the paper's sink (Λ = −100) at the 15 L detection range", "colregs-vortex", low_open=True),
     _P("cv_dpsi_min_deg", 30.0, 0.0, 90.0, "deg", "smallest alteration from the heading at the onset of a give-way "
-       "duty or of the stand-on action (Rule 8, readily apparent)", "NTNU evaluator's Δχ_app (Hagen et al. 2023 configuration)",
-       "colregs-vortex"),
+       "duty or of the stand-on action (Rule 8, readily apparent)", "our choice: an alteration another ship sees at "
+       "once by eye and radar (Rule 8(b)); Cockcroft & Lameijer (p. 51) count alterations under 10° unlikely to be "
+       "readily apparent, and the KCS completes 30° in 2.5 L/U; the published evaluators' readily apparent "
+       "alteration (Hagen et al. 2023) has the same number, which this default does not read", "colregs-vortex"),
     _P("cv_d_risk", 4.0, 0.0, None, "L", "risk of collision (Rule 7), the onset of an encounter: a ship within R_safe "
        "whose straight-line passing distance at the present velocities is below this while the range closes; a "
        "head-on or crossing give-way ship alters at least until her straight line passes at this (Rule 16)",
        "our choice: twice the paper's 2 L collision distance (§Statistical Analysis), a passing with less than one "
-       "collision distance of clearance, as the iitm-lab scoring profile's gate", "colregs-vortex", low_open=True),
+       "collision distance of clearance (the iitm-lab scoring profile's gate d_risk has the same number; this "
+       "default does not read it)", "colregs-vortex", low_open=True),
     _P("cv_r_look", 0.0, 0.0, None, "L", "how far beyond R_safe colregs-vortex sees a ship it must give way to "
        "(head-on, crossing from starboard, overtaking): with a risk of collision (cv_d_risk) within R_safe + cv_r_look "
        "such a ship opens the give-way duty there, and the method steers while that encounter lasts; stand-on "
@@ -302,8 +306,10 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "smallest alteration Cockcroft & Lameijer (p. 51) count as readily apparent (tests/test_colregs_vortex.py)",
        "colregs-vortex", low_open=True),
     _P("cv_speed_cut", 0.5, 0.0, 1.0, "", "fraction of the propeller speed a stand-on ship takes off while she acts "
-       "alone for a ship crossing from port (Rule 17(a)(ii), with the starboard escape)", "Hagen et al. 2023 "
-       "(evaluator.yaml) delta_speed_reduction_app: a 50 % speed reduction is readily apparent", "colregs-vortex",
+       "alone for a ship crossing from port (Rule 17(a)(ii), with the starboard escape)", "our choice: half the "
+       "propeller speed, the engine order from full to half ahead (Rule 8(b), (e)); the published evaluators' "
+       "readily apparent speed reduction (Hagen et al. 2023) has the same number, which this default does not read",
+       "colregs-vortex",
        high_open=True),
     _P("cv_speed_giveway", 0.0, 0.0, 1.0, "", "fraction of the propeller speed a give-way ship takes off while her "
        "alteration alone still leads into close quarters (passing distance below cv_d_cpa_act at a TCPA below "
@@ -368,10 +374,12 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "our choice: where the sink's pull |Λ|/r_g (Λ = −100) still beats the modified vortex f|K⁰|/d at the "
        "collision distance d = 2 L with f = 2 (K⁰ = −10): r_g < 10 L (paper §Limitations, 2nd mechanism)",
        "outcome", low_open=True),
-    _P("colregs_profile", "iitm-lab", None, None, "", "thresholds of the COLREG encounter scorer "
+    _P("colregs_profile", "published", None, None, "", "thresholds of the COLREG encounter scorer "
        "(mmg_casadi.colregs.scorer: Rule 7 risk gate, encounter sectors, graded Rules 8, 13-17) in metrics.json "
        "'encounters' and the Monte Carlo's colregs_risky/colregs_lawful/colregs_score",
-       "iitm-lab: the paper laboratory's R_safe, collision distance and head-on sector (paper Table 3, "
+       "published: the thresholds of Woerner et al. 2019 and Hagen et al. 2023 with seamanship distances and "
+       "timing (Cockcroft & Lameijer); iitm-lab: the paper laboratory's R_safe, collision distance and head-on "
+       "sector (paper Table 3, "
        "§Statistical Analysis); ntnu-2023: Hagen et al. 2023 (Ocean Eng. 288); every threshold's source in "
        "mmg_casadi.colregs.profiles", "outcome", kind="choice", choices=tuple(SCORING_PROFILES)),
     _P("targets", "avoid", None, None, "", "what the sampled target ships of the statistical study do: 'avoid' "

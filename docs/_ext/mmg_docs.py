@@ -289,14 +289,20 @@ RUN_COLUMN_DOCS = {
     "colregs_lawful": ("int", "encounter scorer: of those, the ones it was compliant in"),
     "colregs_score": ("float", "encounter scorer: mean graded score of those encounters (0–1)"),
     "colregs_compliant": ("bool", "encounter scorer: every risky encounter kept (empty without one; secondary)"),
-    "colregs_verdicts": ("str", "encounter scorer: each risky encounter as `other:role:score:rule=0|1/...`, "
-                         "encounters separated by `;` (`mmg_casadi.montecarlo.encounter_summary`)"),
+    "colregs_verdicts": ("str", "encounter scorer: each risky encounter as `other:role:score:rule=0|1/...` "
+                         "(`:e` appended where an excuse by a give-way duty to another ship changed a verdict), "
+                         "encounters separated by `;` (`mmg_casadi.montecarlo.encounter_summary`); profile "
+                         "`colregs_profile`"),
+    "colregs_verdicts_published": ("str", "the same encounters' verdicts under the `published` profile"),
+    "colregs_verdicts_iitm_lab": ("str", "the same under the `iitm-lab` profile"),
+    "colregs_verdicts_ntnu_2023": ("str", "the same under the `ntnu-2023` profile"),
     "colregs_rule9": ("float", "COLREG Rule 9(a): the own ship's share of her time in a narrow channel on its "
                       "starboard side (kept from 0.9; `mmg_casadi.colregs.narrow_channel`); empty when she was "
                       "never in one"),
 }
 
 ENCOUNTER_DOCS = {
+    "profile": "the scoring profile whose verdicts the row counts (`colregs_verdicts_<profile>`)",
     "environment": "environment", "method": "method",
     "group": "`all`, a role (`head-on`, `give-way`, `stand-on`, `overtaking`, `overtaken`) or a rule "
              "(`rule 8` … `rule 17c`)",
@@ -304,9 +310,11 @@ ENCOUNTER_DOCS = {
     "kept": "of those, the ones kept (every applicable rule; for a rule: that rule)",
     "rate": "`kept / n`", "ci_low": "Wilson 95 % interval, low", "ci_high": "Wilson 95 % interval, high",
     "score_mean": "mean graded score of the group's encounters (0–1)",
+    "excused": "of the group's encounters, those whose verdict an excuse by a give-way duty to another ship changed",
 }
 
 PAIR_DOCS = {
+    "profile": "the scoring profile of both methods' verdicts",
     "environment": "environment", "method_a": "method A", "method_b": "method B",
     "pairs": "encounters both methods had: same run, same other ship, same occurrence",
     "rate_a": "A's compliance over the pairs", "rate_b": "B's compliance over the pairs",

@@ -150,7 +150,7 @@ def stand_on_bound(k: int, *, profile=None, rudder_deg: float = 35.0, step: floa
     k : int
         Problem number, 1 to 22.
     profile : str or ScoringProfile, optional
-        Scoring profile (default ``iitm-lab``, :func:`~mmg_casadi.colregs.profiles.scoring_profile`).
+        Scoring profile (default ``published``, :func:`~mmg_casadi.colregs.profiles.scoring_profile`).
     rudder_deg : float
         Rudder angle of the turn (degrees, (0, 35]).
     step : float
@@ -165,10 +165,10 @@ def stand_on_bound(k: int, *, profile=None, rudder_deg: float = 35.0, step: floa
 
     Examples
     --------
-    Case 10: the second target crosses from port at a fine angle, closing at 0.26 U; when her inaction is
-    apparent (TCPA 4) she is 1.0 L away:
+    Case 10 under the laboratory profile: the second target crosses from port at a fine angle, closing at 0.26 U;
+    when her inaction is apparent (TCPA 4) she is 1.0 L away:
 
-    >>> row = stand_on_bound(10)[1]
+    >>> row = stand_on_bound(10, profile="iitm-lab")[1]
     >>> row["role"], round(row["range_late"], 2), row["safe"]
     ('stand-on', 1.04, False)
     """
