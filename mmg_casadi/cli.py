@@ -2,7 +2,10 @@
 
 The only module that knows argparse, flags, the studies and the tuning. Every command that runs the closed loop
 takes the same parameter options: ``--params FILE`` (a TOML file of parameters, e.g. from ``tune apf``) and
-``--set NAME=VALUE`` (repeatable, wins over the file); ``mmg-casadi params`` lists them.
+``--set NAME=VALUE`` (repeatable, wins over the file); ``mmg-casadi params`` lists them. Every command that runs or
+names methods takes ``--plugin MODULE_OR_FILE.py`` (repeatable): a module that registers methods
+(:mod:`mmg_casadi.guidance.plugins`), loaded before anything else, with the installed plugins (entry-point group
+``mmg_casadi.methods``); their names and parameters are then accepted everywhere.
 
 Bad input (unknown command or option, value out of range, malformed scenario or parameter file) prints one line
 naming the field and the allowed values and exits with status 2; nothing is written in that case. An option the
@@ -22,7 +25,7 @@ import tomllib
 from pathlib import Path
 
 from mmg_casadi.errors import InputError, RunError
-from mmg_casadi.guidance import methods as registry
+from mmg_casadi.guidance import methods as registry, plugins
 from mmg_casadi.io import check_output, write_json, write_text
 from mmg_casadi.limits import MAX_SHIPS, check_runs, check_steps
 from mmg_casadi.montecarlo.disturbance_sampling import parse_range
@@ -112,8 +115,29 @@ def _add_determinism(p: argparse.ArgumentParser) -> None:
 
 
 def _add_methods(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.NAMES)} "
+    p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.METHODS)} "
                    "(default: those the study compares)")
+
+
+def _add_plugin(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--plugin", action="append", default=[], metavar="MODULE_OR_FILE",
+                   help="a Python file or module that registers methods (repeatable; see the how-to 'Write your "
+                   "own method')")
+
+
+_PLUGIN_COMMANDS = ("simulate", "study", "tune", "convert", "traffic", "replay", "params")
+"""Commands that take ``--plugin`` (those that run or name methods, and the parameter list)."""
+
+
+def _plugin_specs(argv) -> list[str]:
+    """The values of ``--plugin`` in ``argv`` (``--plugin X`` or ``--plugin=X``), in order."""
+    out = []
+    for k, arg in enumerate(argv):
+        if arg == "--plugin" and k + 1 < len(argv):
+            out.append(argv[k + 1])
+        elif arg.startswith("--plugin="):
+            out.append(arg.partition("=")[2])
+    return out
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -156,8 +180,9 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("simulate", help="run a scenario file or a packaged scenario by name")
     s.add_argument("file", type=_path, help="scenario TOML file, maritime-schema traffic situation (.json) or the "
                    "name of a packaged scenario (see `mmg-casadi scenarios`), e.g. head_on")
-    s.add_argument("--method", help=f"override settings.method: {', '.join(registry.NAMES)}")
+    s.add_argument("--method", help=f"override settings.method: {', '.join(registry.METHODS)}")
     _add_params(s)
+    _add_plugin(s)
     s.add_argument("--out", type=_path, required=True, help="output directory")
     _add_determinism(s)
 
@@ -171,6 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
                                             "a claim-by-claim report"}.get(name, f"the {name} study"))
         sp.add_argument("--out", type=_path, required=True, help="output directory")
         _add_params(sp)
+        _add_plugin(sp)
         _add_determinism(sp)
         if name not in ("waypoint-square", "all", "paper"):
             _add_methods(sp)
@@ -244,6 +270,7 @@ def build_parser() -> argparse.ArgumentParser:
     ta.add_argument("--max-iter", dest="max_iter", type=_int, default=8, help="L-BFGS-B iterations per start")
     ta.add_argument("--workers", type=_int, default=None, help="worker processes of the held-out study")
     _add_params(ta)
+    _add_plugin(ta)
     ta.add_argument("--out", type=_path, required=True, help="output directory")
 
     tc = tunes.add_parser("colregs", help="search colregs-vortex's thresholds for safety plus COLREG compliance, "
@@ -261,6 +288,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "hypercube (each threshold moved by 1/4, then 1/8, ... of its box width; 0: none)")
     tc.add_argument("--workers", type=_int, default=None, help="local worker processes")
     _add_params(tc)
+    _add_plugin(tc)
     tc.add_argument("--out", type=_path, required=True, help="output directory (rerun it to resume)")
 
     c = sub.add_parser("convert", help="maritime-schema traffic situation (.json) <-> scenario file (.toml)")
@@ -271,6 +299,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--length-scale", default="kcs", help="json->toml: kcs (230 m) | own-ship")
     c.add_argument("--reference", default=None,
                    help="toml->json: LAT,LON of the scenario origin [deg] (default: from the file's header)")
+    _add_plugin(c)
 
     tr = sub.add_parser("traffic", help="generate N ships on random crossing routes at environment 5's density")
     tr.add_argument("ships", type=int, help="number of ships (the first is the own ship)")
@@ -278,6 +307,7 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--method", default=registry.DEFAULT, help="every ship's method")
     tr.add_argument("--t-max", type=float, default=PARAMETERS["t_max"].default, help="horizon [L/U]")
     tr.add_argument("--out", type=_path, required=True, help="output scenario file (.toml)")
+    _add_plugin(tr)
 
     ge = sub.add_parser("generate", help="standard encounter sets: situations with targets in requested COLREG "
                         "encounters, as scenario files and maritime-schema traffic situations")
@@ -299,9 +329,11 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--start", default=None, help="time at which the own ship starts from her recorded state "
                     "(seconds or ISO 8601 as in the file; default her first report)")
     rp.add_argument("--out", type=_path, required=True, help="output scenario file (.toml)")
+    _add_plugin(rp)
 
     pp = sub.add_parser("params", help="list every parameter (default, allowed values, unit, meaning, source)")
     pp.add_argument("--markdown", action="store_true", help="as a Markdown table")
+    _add_plugin(pp)
     return p
 
 
@@ -378,6 +410,13 @@ def _study(a) -> dict:
     if getattr(a, "runs", None) is not None:  # before any work (study paper runs the quick studies first)
         check_runs(a.runs)
     names = QUICK_STUDIES if a.study == "all" else (a.study,)
+    if a.study == "all":  # one run of every quick study: a parameter of any method they run applies
+        with registry.run_of((*(getattr(a, "methods", None) or registry.AVOIDING), "none"), params):
+            return _studies(a, names, params)
+    return _studies(a, names, params)
+
+
+def _studies(a, names, params) -> dict:
     out = {}
     for n in names:
         mod = importlib.import_module(f"studies.{n.replace('-', '_')}")
@@ -565,10 +604,15 @@ def main(argv=None) -> int:
     int
         0 on success, 2 for invalid input, 1 for a run error, and the signal's status after an interruption.
     """
-    parser = build_parser()
     a = None
     try:
         with terminate_as_interrupt():
+            argv = list(sys.argv[1:] if argv is None else argv)
+            plugins.load_installed()
+            if argv and argv[0] in _PLUGIN_COMMANDS:  # before parsing: --methods, --set and the help know them
+                for spec in _plugin_specs(argv):
+                    plugins.load(spec)
+            parser = build_parser()
             a, extra = parser.parse_known_args(argv)
             end_deferred_signals()  # a signal received while the package loaded (mmg_casadi/__init__.py)
             if extra:
