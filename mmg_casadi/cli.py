@@ -140,6 +140,33 @@ def _plugin_specs(argv) -> list[str]:
     return out
 
 
+def _add_search(tunes, what: str) -> None:
+    """``tune colregs`` (colregs-vortex's thresholds) and ``tune search`` (any method's parameters, --search)."""
+    helps = {"colregs": "search colregs-vortex's thresholds for safety plus COLREG compliance, judged on paired "
+             "held-out runs", "search": "the same search for any method (--method) over a box of its parameters "
+             "(--search NAME=LOW:HIGH, repeatable)"}
+    tc = tunes.add_parser(what, help=helps[what])
+    if what == "search":
+        tc.add_argument("--method", required=True, help="the tuned method (a plugin's too)")
+        tc.add_argument("--search", action="append", required=True, metavar="NAME=LOW:HIGH",
+                        help="a numeric parameter of the method and the interval searched (repeatable)")
+    tc.add_argument("--design", type=_int, default=1000, help="design runs per environment (run ids 0..N-1)")
+    tc.add_argument("--holdout", type=_int, default=4000, help="held-out runs per environment (the run ids after "
+                    "the design runs)")
+    tc.add_argument("--candidates", type=_int, default=16, help="Latin-hypercube candidates besides the defaults")
+    tc.add_argument("--envs", default="5", help="environments of the design and held-out runs, e.g. 5 or 1-5")
+    tc.add_argument("--failure-weight", dest="failure_weight", type=_float, default=10.0,
+                    help="objective = compliance - W x failure rate (default 10)")
+    tc.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
+    tc.add_argument("--search-seed", dest="search_seed", type=_int, default=0, help="seed of the Latin hypercube")
+    tc.add_argument("--refine", type=_int, default=1, help="coordinate sweeps around the best point after the "
+                    "hypercube (each threshold moved by 1/4, then 1/8, ... of its box width; 0: none)")
+    tc.add_argument("--workers", type=_int, default=None, help="local worker processes")
+    _add_params(tc)
+    _add_plugin(tc)
+    tc.add_argument("--out", type=_path, required=True, help="output directory (rerun it to resume)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``mmg-casadi`` argument parser (one sub-parser per command, study and tuning).
 
@@ -248,7 +275,7 @@ def build_parser() -> argparse.ArgumentParser:
             sp.add_argument("--workers", type=_int, default=None, help="local worker processes")
 
     t = sub.add_parser("tune", help="controller and field tuning")
-    tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf,colregs}")
+    tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf,colregs,search}")
     tunes.required = True
     tp = tunes.add_parser("pd", help="PD heading-gain design (pole placement on the linearised model)")
     tp.add_argument("--speed", type=_float, default=1.0, help="speed / design speed, [0.2, 1.2]")
@@ -273,23 +300,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_plugin(ta)
     ta.add_argument("--out", type=_path, required=True, help="output directory")
 
-    tc = tunes.add_parser("colregs", help="search colregs-vortex's thresholds for safety plus COLREG compliance, "
-                          "judged on paired held-out runs")
-    tc.add_argument("--design", type=_int, default=1000, help="design runs per environment (run ids 0..N-1)")
-    tc.add_argument("--holdout", type=_int, default=4000, help="held-out runs per environment (the run ids after "
-                    "the design runs)")
-    tc.add_argument("--candidates", type=_int, default=16, help="Latin-hypercube candidates besides the defaults")
-    tc.add_argument("--envs", default="5", help="environments of the design and held-out runs, e.g. 5 or 1-5")
-    tc.add_argument("--failure-weight", dest="failure_weight", type=_float, default=10.0,
-                    help="objective = compliance - W x failure rate (default 10)")
-    tc.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
-    tc.add_argument("--search-seed", dest="search_seed", type=_int, default=0, help="seed of the Latin hypercube")
-    tc.add_argument("--refine", type=_int, default=1, help="coordinate sweeps around the best point after the "
-                    "hypercube (each threshold moved by 1/4, then 1/8, ... of its box width; 0: none)")
-    tc.add_argument("--workers", type=_int, default=None, help="local worker processes")
-    _add_params(tc)
-    _add_plugin(tc)
-    tc.add_argument("--out", type=_path, required=True, help="output directory (rerun it to resume)")
+    for what in ("colregs", "search"):
+        _add_search(tunes, what)
 
     c = sub.add_parser("convert", help="maritime-schema traffic situation (.json) <-> scenario file (.toml)")
     c.add_argument("file", type=_path, help="input .json (maritime-schema) or .toml (scenario)")
@@ -450,11 +462,12 @@ def _tune(a) -> dict:
         from tuning import cli_pd  # python-control and the tuning stack: only for 'tune'
         return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn, tracking_tolerance=a.tracking_tolerance,
                           vessel=a.vessel)
-    if a.what == "colregs":
+    if a.what in ("colregs", "search"):
         from tuning import colregs  # the tuning stack: only for 'tune'
+        kw = {} if a.what == "colregs" else {"method": a.method, "box": _search_box(a.search)}
         return colregs.run(a.out, design=a.design, holdout=a.holdout, n_candidates=a.candidates, envs=a.envs,
                            params=_params_of(a), failure_weight=a.failure_weight, seed=a.seed,
-                           search_seed=a.search_seed, refine=a.refine, workers=a.workers)
+                           search_seed=a.search_seed, refine=a.refine, workers=a.workers, **kw)
     from tuning import cli_apf  # the tuning stack: only for 'tune'
     try:
         envs = tuple(parse_envs(a.holdout_envs))
@@ -463,6 +476,21 @@ def _tune(a) -> dict:
     return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a), envs=envs,
                        target=(5,) if 5 in envs else envs[-1:], starts=a.starts, grid=a.grid,
                        max_iter=a.max_iter, workers=a.workers)
+
+
+def _search_box(items) -> dict:
+    """``NAME=LOW:HIGH`` items of ``--search`` as ``{name: (low, high)}`` (checked by the tuner)."""
+    box = {}
+    for item in items:
+        name, sep, rng = item.partition("=")
+        lo, sep2, hi = rng.partition(":")
+        try:
+            box[name.strip()] = (float(lo), float(hi))
+        except ValueError:
+            raise InputError("--search", "NAME=LOW:HIGH with numbers LOW < HIGH", item) from None
+        if not sep or not sep2:
+            raise InputError("--search", "NAME=LOW:HIGH with numbers LOW < HIGH", item)
+    return box
 
 
 def _convert(a) -> dict:
@@ -580,7 +608,7 @@ def _resumable(a) -> bool:
     """Whether the parsed command resumes from the files it has written when it is run again."""
     return (a is not None and (a.command, getattr(a, "study", None) or getattr(a, "what", None)) in
             {("study", "statistics"), ("study", "sweep"), ("study", "paper"), ("tune", "apf"),
-             ("tune", "colregs")})
+             ("tune", "colregs"), ("tune", "search")})
 
 
 def _flag(field: str, a) -> str:

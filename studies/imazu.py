@@ -74,6 +74,7 @@ def run(out, *, methods=None, params=None, targets: str = "both") -> dict:
         raise InputError("targets", "one of: hold, avoid, both", targets)
     methods = registry.parse_list(methods or DEFAULT_METHODS)
     resolved = resolve(params, prefix="params.")
+    registry.check_run((*methods, "none"), params)  # before anything is written
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     metrics = {"params": resolved, "cases": list(CASES), "results": {}}
