@@ -28,7 +28,8 @@ if ((getattr(_sys, "argv", None) or [""])[0].endswith("mmg-casadi")
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.closed_loop.problem import ClosedLoopModel, Problem, build_problem
 from mmg_casadi.closed_loop.simulation import Trajectory, simulate
-from mmg_casadi.guidance.methods import METHODS, Command, GuidanceInputs, Method, register, unregister
+from mmg_casadi.guidance.contract import Command, GuidanceInputs, Method
+from mmg_casadi.guidance.methods import METHODS, register, unregister
 from mmg_casadi.guidance.plugins import load as load_plugin
 from mmg_casadi.montecarlo.study import run_study
 from mmg_casadi.params import PARAMETERS, Param, load_file as load_params, resolve as resolve_params

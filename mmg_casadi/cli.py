@@ -125,7 +125,7 @@ def _add_plugin(p: argparse.ArgumentParser) -> None:
                    "own method')")
 
 
-_PLUGIN_COMMANDS = ("simulate", "study", "tune", "convert", "traffic", "replay", "params")
+_PLUGIN_COMMANDS = ("simulate", "study", "tune", "convert", "traffic", "replay", "generate", "params")
 """Commands that take ``--plugin`` (those that run or name methods, and the parameter list)."""
 
 
@@ -328,6 +328,7 @@ def build_parser() -> argparse.ArgumentParser:
     ge.add_argument("--situations", type=_int, default=None, help="number of situations (replaces set.situations)")
     ge.add_argument("--seed", type=_int, default=None, help="seed of the set (replaces set.seed)")
     ge.add_argument("--out", type=_path, required=True, help="output directory")
+    _add_plugin(ge)
 
     rp = sub.add_parser("replay", help="AIS tracks (.csv) as a scenario file: the targets replay their recorded "
                         "tracks, the own ship sails hers with a method from a chosen moment")

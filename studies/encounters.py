@@ -250,9 +250,11 @@ def run(out, *, set_dir, methods=None, targets: str = "hold", params=None) -> di
                 enc = _encounter_rows(res, name, m, requested.get(name, []))
                 risky = [e for e in enc if e["applicable"]]
                 row = {"situation": name, "method": m, "targets": targets, "ships": len(sc.ships),
-                       "safe": bool(own["reached_goal"] and not own["collided"]), "reached_goal": bool(own["reached_goal"]),
+                       "safe": bool(own["reached_goal"] and not own["collided"]),
+                       "reached_goal": bool(own["reached_goal"]),
                        "collided": bool(own["collided"]), "min_distance": float(np.min(res.own_distance())),
-                       "delay": own["delay"], "encounters": len(risky), "kept": sum(bool(e["compliant"]) for e in risky),
+                       "delay": own["delay"], "encounters": len(risky),
+                       "kept": sum(bool(e["compliant"]) for e in risky),
                        "wall_s": wall}
                 safe += row["safe"]
                 situations.append(row)

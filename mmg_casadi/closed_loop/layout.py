@@ -131,10 +131,10 @@ class Layout:
         shipped methods, which leaves the layout's step and key as without this field.
     commanded : tuple of int
         Indices of the ships steered from outside, increasing (:mod:`mmg_casadi.gym`,
-        :func:`~mmg_casadi.closed_loop.simulation.simulate` with ``commands``): at every step such a ship's PD controller steers the heading in
-        her state row ``command_heading`` (rad) and, with ``command_rpm``, her engine follows the propeller speed
-        in ``command_rpm`` (rev/min, clipped to dead slow ahead .. maximum rpm), else her leg's service speed
-        exactly; the step carries both rows unchanged, the caller writes them. No ILOS, no method, no walls'
+        :func:`~mmg_casadi.closed_loop.simulation.simulate` with ``commands``): at every step such a ship's PD
+        controller steers the heading in her state row ``command_heading`` (rad) and, with ``command_rpm``, her
+        engine follows the propeller speed in ``command_rpm`` (rev/min, clipped to dead slow ahead .. maximum
+        rpm), else her leg's service speed exactly; the step carries both rows unchanged, the caller writes them. No ILOS, no method, no walls'
         field. Empty: the layout's step and key are as without this field. Not with replayed ships' indices nor
         the fleet step.
     command_rpm : bool

@@ -207,7 +207,7 @@ def build_problem(sc, params: dict | None = None, *, error=None, commanded=(), c
     error : type, optional
         Error class for a bad override (default :class:`~mmg_casadi.errors.ParameterError`).
     commanded : iterable of int, optional
-        Ships steered from outside (:attr:`Layout.commanded <mmg_casadi.closed_loop.layout.Layout.commanded>`;
+        Ships steered from outside (``Layout.commanded``;
         their methods are not used): the environment of :mod:`mmg_casadi.gym` and
         :func:`~mmg_casadi.closed_loop.simulation.simulate` with ``commands``.
     command_rpm : bool, default False
@@ -246,8 +246,9 @@ def build_problem(sc, params: dict | None = None, *, error=None, commanded=(), c
     check_steps(resolved["t_max"], resolved["dt"], cls=error or ParameterError, ships=len(sc.ships))
     check_unrolled(len(sc.ships), resolved["fleet_from_ships"], cls=error or ParameterError)
     if commanded and len(sc.ships) >= resolved["fleet_from_ships"]:
-        raise (error or ParameterError)("fleet_from_ships", f"more than the {len(sc.ships)} ships of a scenario with "
-                                        "commanded ships (the fleet step takes no commands)", resolved["fleet_from_ships"])
+        raise (error or ParameterError)("fleet_from_ships", f"more than the {len(sc.ships)} ships of a scenario "
+                                        "with commanded ships (the fleet step takes no commands)",
+                                        resolved["fleet_from_ships"])
     vessels = tuple(getattr(s, "vessel", None) or resolved["vessel"] for s in sc.ships)
     for i, v in enumerate(vessels):
         load_vessel(v, f"ships[{i}].vessel")
@@ -271,7 +272,7 @@ def build_problem(sc, params: dict | None = None, *, error=None, commanded=(), c
 
 def _options(methods_used, resolved: dict) -> tuple:
     """The structural parameters of the registered methods the ships use, ``(name, value)`` in registry order
-    (:attr:`Layout.options <mmg_casadi.closed_loop.layout.Layout.options>`)."""
+    (``Layout.options``)."""
     used = set(methods_used)
     return tuple((k, resolved[k]) for n, m in methods.METHODS.items() if n in used for k in m.options)
 

@@ -316,12 +316,13 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200,
     chunk : int
         Steps per compiled ``mapaccum`` call.
     commands : array_like, optional
-        Orders of the commanded ships (:attr:`Layout.commanded <mmg_casadi.closed_loop.layout.Layout.commanded>`),
+        Orders of the commanded ships (``Layout.commanded``),
         one row per guidance step: ``(K, C)`` headings (rad) or, with ``Layout.command_rpm``, ``(K, C, 2)``
         headings and propeller speeds (rev/min). Each step writes its row into the ships' ``command_heading`` /
-        ``command_rpm`` state rows and calls the same compiled step as without commands, so the rollout equals
-        stepping :mod:`mmg_casadi.gym`'s environment with those actions to the bit; it ends after ``K`` steps
-        (or earlier, as without commands). Without ``commands`` a commanded ship holds the orders of ``x0``.
+        ``command_rpm`` state rows and calls the same compiled step as without commands (which carries the rows
+        on: sample ``k + 1`` holds the orders of step ``k``), so the rollout equals stepping
+        :mod:`mmg_casadi.gym`'s environment with those actions to the bit; it ends after ``K`` steps (or earlier,
+        as without commands). Without ``commands`` a commanded ship holds the orders of ``x0``.
 
     Returns
     -------
@@ -432,7 +433,6 @@ def _simulate_commands(layout: Layout, x0, p, commands) -> Trajectory:
             break
         for j, r in enumerate(rows):
             x[r] = cmd[k, j]
-        xs[-1] = x.copy()  # the sample holds the orders the step used
         x, aux = step(x, p)
         x = x.ravel()
         xs.append(x.copy())

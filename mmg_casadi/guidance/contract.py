@@ -17,23 +17,23 @@ propeller speed (a method may limit ILOS's turn, ``turn_limit``). A method with 
 speed (rev/min) that the engine (:func:`mmg_casadi.vessel.actuators.engine_step`) follows at its rate, clipped to
 dead slow ahead .. maximum rpm; any other method keeps the service propeller speed exactly.
 
-Numbers the builder reads come from ``g.P`` by name: the closed loop's parameters (:data:`~mmg_casadi.closed_loop.layout.GLOBAL_PARAMS`:
-``r_safe``, ``collision_distance``, ``lam_sink``, ...), the ``inputs`` the method lists
-(table parameters only this method reads) and the method's own parameters (``params``; each a
-:class:`~mmg_casadi.params.Param` with default, range, unit, meaning and source, named with the method's
+Numbers the builder reads come from ``g.P`` by name: the closed loop's parameters
+(:data:`~mmg_casadi.closed_loop.layout.GLOBAL_PARAMS`: ``r_safe``, ``collision_distance``, ``lam_sink``, ...), the
+``inputs`` the method lists (table parameters only this method reads) and the method's own parameters (``params``;
+each a :class:`~mmg_casadi.params.Param` with default, range, unit, meaning and source, named with the method's
 ``prefix``). Its own parameters join the one parameter table (:data:`mmg_casadi.params.PARAMETERS`, group = the
 method's name) while the method is registered, so scenario files, ``--set``, ``--params``, ``mmg-casadi params``,
 ``study sweep`` and the tuners reach them, and a run none of whose ships uses the method refuses them
-(:func:`~mmg_casadi.guidance.methods.check_used`). A numeric parameter is an input of the compiled step (changing it does not recompile; a
-name ending in ``_deg`` reaches the builder in rad without the suffix); a ``structural`` one (an int, choice or
-bool that changes the shape, e.g. a number of candidates) is a field of the step's shape, read with
+(:func:`~mmg_casadi.guidance.methods.check_used`). A numeric parameter is an input of the compiled step (changing it
+does not recompile; a name ending in ``_deg`` reaches the builder in rad without the suffix); a ``structural`` one (an
+int, choice or bool that changes the shape, e.g. a number of candidates) is a field of the step's shape, read with
 ``g.layout.option(name)``.
 
-``groups`` lists the parameter groups (:func:`mmg_casadi.params.groups`) whose parameters the builder reads: they
-are the method's parameters for :func:`~mmg_casadi.guidance.methods.check_used` (a method with ``params`` owns its own group without listing
-it). ``memory`` names state rows the method carries from step to step (rad; each starts at the ship's heading and
-is reset to the heading after a step in which the method was not in charge); the builder reads them in
-``g.memory`` and returns their next values in ``Command.memory``.
+``groups`` lists the parameter groups (:func:`mmg_casadi.params.groups`) whose parameters the builder reads: they are
+the method's parameters for :func:`~mmg_casadi.guidance.methods.check_used` (a method with ``params`` owns its own
+group without listing it). ``memory`` names state rows the method carries from step to step (rad; each starts at the
+ship's heading and is reset to the heading after a step in which the method was not in charge); the builder reads them
+in ``g.memory`` and returns their next values in ``Command.memory``.
 
 Examples
 --------
@@ -159,8 +159,9 @@ class Method:
         ``GuidanceInputs -> Command`` (a :class:`Command`, never a bare vector), called once when a closed-loop
         step is built; ``None`` for pure ILOS waypoint tracking.
     groups : tuple of str
-        Parameter groups (:func:`mmg_casadi.params.groups`) whose parameters the builder reads; a run may set
-        those parameters only if one of its ships uses a method that lists the group (:func:`~mmg_casadi.guidance.methods.check_used`).
+        Parameter groups (:func:`mmg_casadi.params.groups`) whose parameters the builder reads; a run may set those
+        parameters only if one of its ships uses a method that lists the group
+        (:func:`~mmg_casadi.guidance.methods.check_used`).
     source : str
         Where the method comes from (a paper and its equations, or "ours: ...").
     inputs : tuple of str
@@ -192,10 +193,10 @@ class Method:
         no neighbour is within R_safe (an encounter with a ship within its lookout), so the closed loop neither
         hands the ship to ILOS nor resets the memory; None: the method steers only with a neighbour within R_safe.
     params : tuple of Param
-        The method's own parameters (:class:`~mmg_casadi.params.Param`: name, default, range, unit, meaning,
-        source), each named with ``prefix``; :func:`~mmg_casadi.guidance.methods.register` enters them into the parameter table as the group
-        named after the method (their ``group`` may be left empty). Numeric ones are step inputs (in ``g.P``),
-        ``structural`` ones fields of the step's shape (``g.layout.option(name)``).
+        The method's own parameters (:class:`~mmg_casadi.params.Param`: name, default, range, unit, meaning, source),
+        each named with ``prefix``; :func:`~mmg_casadi.guidance.methods.register` enters them into the parameter table
+        as the group named after the method (their ``group`` may be left empty). Numeric ones are step inputs (in
+        ``g.P``), ``structural`` ones fields of the step's shape (``g.layout.option(name)``).
     prefix : str or None
         The prefix of every name in ``params``; ``None``: the method's name with ``-`` and ``.`` as ``_``, plus
         ``_`` (``"starboard-rule"`` -> ``"starboard_rule_"``).
@@ -231,7 +232,7 @@ class Method:
     @property
     def options(self) -> tuple[str, ...]:
         """Names of the method's own structural parameters (fields of the step's shape,
-        :attr:`~mmg_casadi.closed_loop.layout.Layout.options`)."""
+        ``Layout.options``)."""
         return tuple(p.name for p in self.params if p.structural)
 
     def owns(self, group: str) -> bool:

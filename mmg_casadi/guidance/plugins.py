@@ -1,7 +1,7 @@
 """Methods from outside the package: plugin modules and files, installed plugins, and shipping them to workers.
 
 A plugin is a Python module that registers one or more methods when it is imported
-(:func:`mmg_casadi.guidance.methods.register`; the how-to "Write your own method" has one). It comes in three ways:
+(:func:`mmg_casadi.guidance.methods.register`; the how-to "Write your own method" has one). It comes in two ways:
 
 * ``--plugin FILE.py`` or ``--plugin package.module`` on the command line (repeatable; every command that runs
   methods takes it), or :func:`load` in Python;
@@ -13,7 +13,7 @@ A plugin is a Python module that registers one or more methods when it is import
 
   The command line loads every installed plugin when it starts, the Python API the first time it looks up a name
   that is not registered (:func:`mmg_casadi.guidance.methods.names`), or at
-:func:`~mmg_casadi.guidance.methods.load_installed`.
+  :func:`~mmg_casadi.guidance.methods.load_installed`.
 
 A name that is already registered is refused with one line naming the plugin (exit status 2 on the command line);
 loading the same plugin twice registers nothing the second time.

@@ -6,7 +6,7 @@ steps ``N`` episodes with one call of the compiled step mapped over them.
 
 Step
     One guidance step ``dt`` of the compiled closed loop (:func:`~mmg_casadi.closed_loop.simulation.stepper`): the
-    own ship is a *commanded* ship (:attr:`Layout.commanded <mmg_casadi.closed_loop.layout.Layout.commanded>`): her
+    own ship is a *commanded* ship (``Layout.commanded``): her
     PD heading controller steers the heading the action orders (written into her ``command_heading`` state row)
     and her engine keeps her service propeller speed exactly, or follows the ordered rpm (``rpm=True``). No ILOS,
     no method, no walls' field for her; the MMG model, the engine, the other ships' guidance and the bookkeeping

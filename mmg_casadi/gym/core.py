@@ -116,18 +116,42 @@ def commanded_problem(scenario, params=None, *, rpm: bool = False) -> Problem:
 
 @dataclass
 class Statics:
-    """What does not change in an episode, for a batch of columns: routes, hazards, sizes (numpy)."""
+    """What does not change in an episode, for a batch of ``B`` columns (numpy).
 
-    path: np.ndarray       # (B, K, 2) own ship's padded path
-    to_go: np.ndarray      # (B, K) route length from path column k to the goal
-    n_path: np.ndarray     # (B,)
-    stays: np.ndarray      # (B, N) 1 if a ship stays as an obstacle after her goal
-    obstacles: np.ndarray  # (B, S, 3)
-    walls: np.ndarray      # (B, W, 4)
-    current: np.ndarray    # (B, 2) current over the ground (U)
-    rpm_range: np.ndarray  # (B, 2) own ship's commandable propeller speeds
+    Parameters
+    ----------
+    path : ndarray (B, K, 2)
+        The own ship's padded path (start, then waypoints; L).
+    to_go : ndarray (B, K)
+        Route length from path column k to the goal (L).
+    n_path : ndarray (B,)
+        Columns of the path in use.
+    stays : ndarray (B, N)
+        1 if a ship stays as an obstacle after her goal.
+    obstacles : ndarray (B, S, 3)
+        Static obstacles: x, y, radius (L).
+    walls : ndarray (B, W, 4)
+        Wall and land segments: ax, ay, bx, by (L).
+    current : ndarray (B, 2)
+        The current's velocity over the ground (U).
+    rpm_range : ndarray (B, 2)
+        The own ship's commandable propeller speeds (rev/min).
+    rpm_design : float
+        The own ship's design propeller speed (rev/min).
+    t_max : ndarray (B,)
+        Horizons (L/U).
+    """
+
+    path: np.ndarray
+    to_go: np.ndarray
+    n_path: np.ndarray
+    stays: np.ndarray
+    obstacles: np.ndarray
+    walls: np.ndarray
+    current: np.ndarray
+    rpm_range: np.ndarray
     rpm_design: float
-    t_max: np.ndarray      # (B,)
+    t_max: np.ndarray
 
 
 def statics(layout: Layout, P: np.ndarray) -> Statics:
