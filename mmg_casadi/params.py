@@ -38,7 +38,7 @@ from mmg_casadi.vessel.library import VESSELS
 GROUPS = ("simulation", "vessel", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "colregs-vortex",
           "walls", "velocity-obstacle", "outcome", "environment")
 """Parameter groups of the shipped table, in the order of the README table; a method's guidance uses its own
-group(s). A method that declares its own parameters (:attr:`mmg_casadi.guidance.methods.Method.params`) adds a group
+group(s). A method that declares its own parameters (``Method.params``) adds a group
 named after it while it is registered (:func:`groups`)."""
 
 CLOSED_LOOP_GROUPS = ("simulation", "vessel", "ilos", "pd", "walls", "outcome", "environment")
