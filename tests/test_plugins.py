@@ -127,7 +127,6 @@ def test_the_howto_method_in_tune_search_over_its_own_parameters(tmp_path, capsy
     assert all(20 <= c["starboard_rule_turn_deg"] <= 70 and 2 <= c["starboard_rule_d_cpa"] <= 8 for c in cands)
 
 
-@pytest.mark.slow
 def test_the_howto_method_in_study_imazu(tmp_path, capsys, registry):
     code, err = _main(capsys, "study", "imazu", "--plugin", HOWTO, "--methods", NAME, "--targets", "hold",
                       "--out", tmp_path)
