@@ -2,7 +2,10 @@
 
 The only module that knows argparse, flags, the studies and the tuning. Every command that runs the closed loop
 takes the same parameter options: ``--params FILE`` (a TOML file of parameters, e.g. from ``tune apf``) and
-``--set NAME=VALUE`` (repeatable, wins over the file); ``mmg-casadi params`` lists them.
+``--set NAME=VALUE`` (repeatable, wins over the file); ``mmg-casadi params`` lists them. Every command that runs or
+names methods takes ``--plugin MODULE_OR_FILE.py`` (repeatable): a module that registers methods
+(:mod:`mmg_casadi.guidance.plugins`), loaded before anything else, with the installed plugins (entry-point group
+``mmg_casadi.methods``); their names and parameters are then accepted everywhere.
 
 Bad input (unknown command or option, value out of range, malformed scenario or parameter file) prints one line
 naming the field and the allowed values and exits with status 2; nothing is written in that case. An option the
@@ -22,7 +25,7 @@ import tomllib
 from pathlib import Path
 
 from mmg_casadi.errors import InputError, RunError
-from mmg_casadi.guidance import methods as registry
+from mmg_casadi.guidance import methods as registry, plugins
 from mmg_casadi.io import check_output, write_json, write_text
 from mmg_casadi.limits import MAX_SHIPS, check_runs, check_steps
 from mmg_casadi.montecarlo.disturbance_sampling import parse_range
@@ -113,8 +116,56 @@ def _add_determinism(p: argparse.ArgumentParser) -> None:
 
 
 def _add_methods(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.NAMES)} "
+    p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.METHODS)} "
                    "(default: those the study compares)")
+
+
+def _add_plugin(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--plugin", action="append", default=[], metavar="MODULE_OR_FILE",
+                   help="a Python file or module that registers methods (repeatable; see the how-to 'Write your "
+                   "own method')")
+
+
+_PLUGIN_COMMANDS = ("simulate", "study", "tune", "convert", "traffic", "replay", "generate", "params")
+"""Commands that take ``--plugin`` (those that run or name methods, and the parameter list)."""
+
+
+def _plugin_specs(argv) -> list[str]:
+    """The values of ``--plugin`` in ``argv`` (``--plugin X`` or ``--plugin=X``), in order."""
+    out = []
+    for k, arg in enumerate(argv):
+        if arg == "--plugin" and k + 1 < len(argv):
+            out.append(argv[k + 1])
+        elif arg.startswith("--plugin="):
+            out.append(arg.partition("=")[2])
+    return out
+
+
+def _add_search(tunes, what: str) -> None:
+    """``tune colregs`` (colregs-vortex's thresholds) and ``tune search`` (any method's parameters, --search)."""
+    helps = {"colregs": "search colregs-vortex's thresholds for safety plus COLREG compliance, judged on paired "
+             "held-out runs", "search": "the same search for any method (--method) over a box of its parameters "
+             "(--search NAME=LOW:HIGH, repeatable)"}
+    tc = tunes.add_parser(what, help=helps[what])
+    if what == "search":
+        tc.add_argument("--method", required=True, help="the tuned method (a plugin's too)")
+        tc.add_argument("--search", action="append", required=True, metavar="NAME=LOW:HIGH",
+                        help="a numeric parameter of the method and the interval searched (repeatable)")
+    tc.add_argument("--design", type=_int, default=1000, help="design runs per environment (run ids 0..N-1)")
+    tc.add_argument("--holdout", type=_int, default=4000, help="held-out runs per environment (the run ids after "
+                    "the design runs)")
+    tc.add_argument("--candidates", type=_int, default=16, help="Latin-hypercube candidates besides the defaults")
+    tc.add_argument("--envs", default="5", help="environments of the design and held-out runs, e.g. 5 or 1-5")
+    tc.add_argument("--failure-weight", dest="failure_weight", type=_float, default=10.0,
+                    help="objective = compliance - W x failure rate (default 10)")
+    tc.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
+    tc.add_argument("--search-seed", dest="search_seed", type=_int, default=0, help="seed of the Latin hypercube")
+    tc.add_argument("--refine", type=_int, default=1, help="coordinate sweeps around the best point after the "
+                    "hypercube (each threshold moved by 1/4, then 1/8, ... of its box width; 0: none)")
+    tc.add_argument("--workers", type=_int, default=None, help="local worker processes")
+    _add_params(tc)
+    _add_plugin(tc)
+    tc.add_argument("--out", type=_path, required=True, help="output directory (rerun it to resume)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -157,8 +208,9 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("simulate", help="run a scenario file or a packaged scenario by name")
     s.add_argument("file", type=_path, help="scenario TOML file, maritime-schema traffic situation (.json) or the "
                    "name of a packaged scenario (see `mmg-casadi scenarios`), e.g. head_on")
-    s.add_argument("--method", help=f"override settings.method: {', '.join(registry.NAMES)}")
+    s.add_argument("--method", help=f"override settings.method: {', '.join(registry.METHODS)}")
     _add_params(s)
+    _add_plugin(s)
     s.add_argument("--out", type=_path, required=True, help="output directory")
     _add_determinism(s)
 
@@ -175,6 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--profile", default=None, help="scoring profile of the figures and explain.json (default: the "
                     "study's colregs_profile)")
     ex.add_argument("--out", type=_path, required=True, help="output directory")
+    _add_plugin(ex)
 
     st = sub.add_parser("study", help="the paper's studies")
     studies = st.add_subparsers(dest="study", parser_class=_Parser, metavar="{" + ",".join(STUDIES) + "}")
@@ -190,6 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
         if name == "labelled":  # scripted cases at the table's defaults, judged under every profile
             continue
         _add_params(sp)
+        _add_plugin(sp)
         if name not in ("waypoint-square", "all", "paper"):
             _add_methods(sp)
         if name == "paper":
@@ -245,7 +299,7 @@ def build_parser() -> argparse.ArgumentParser:
             sp.add_argument("--workers", type=_int, default=None, help="local worker processes")
 
     t = sub.add_parser("tune", help="controller and field tuning")
-    tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf,colregs}")
+    tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf,colregs,search}")
     tunes.required = True
     tp = tunes.add_parser("pd", help="PD heading-gain design (pole placement on the linearised model)")
     tp.add_argument("--speed", type=_float, default=1.0, help="speed / design speed, [0.2, 1.2]")
@@ -267,24 +321,11 @@ def build_parser() -> argparse.ArgumentParser:
     ta.add_argument("--max-iter", dest="max_iter", type=_int, default=8, help="L-BFGS-B iterations per start")
     ta.add_argument("--workers", type=_int, default=None, help="worker processes of the held-out study")
     _add_params(ta)
+    _add_plugin(ta)
     ta.add_argument("--out", type=_path, required=True, help="output directory")
 
-    tc = tunes.add_parser("colregs", help="search colregs-vortex's thresholds for safety plus COLREG compliance, "
-                          "judged on paired held-out runs")
-    tc.add_argument("--design", type=_int, default=1000, help="design runs per environment (run ids 0..N-1)")
-    tc.add_argument("--holdout", type=_int, default=4000, help="held-out runs per environment (the run ids after "
-                    "the design runs)")
-    tc.add_argument("--candidates", type=_int, default=16, help="Latin-hypercube candidates besides the defaults")
-    tc.add_argument("--envs", default="5", help="environments of the design and held-out runs, e.g. 5 or 1-5")
-    tc.add_argument("--failure-weight", dest="failure_weight", type=_float, default=10.0,
-                    help="objective = compliance - W x failure rate (default 10)")
-    tc.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
-    tc.add_argument("--search-seed", dest="search_seed", type=_int, default=0, help="seed of the Latin hypercube")
-    tc.add_argument("--refine", type=_int, default=1, help="coordinate sweeps around the best point after the "
-                    "hypercube (each threshold moved by 1/4, then 1/8, ... of its box width; 0: none)")
-    tc.add_argument("--workers", type=_int, default=None, help="local worker processes")
-    _add_params(tc)
-    tc.add_argument("--out", type=_path, required=True, help="output directory (rerun it to resume)")
+    for what in ("colregs", "search"):
+        _add_search(tunes, what)
 
     c = sub.add_parser("convert", help="maritime-schema traffic situation (.json) <-> scenario file (.toml)")
     c.add_argument("file", type=_path, help="input .json (maritime-schema) or .toml (scenario)")
@@ -294,6 +335,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--length-scale", default="kcs", help="json->toml: kcs (230 m) | own-ship")
     c.add_argument("--reference", default=None,
                    help="toml->json: LAT,LON of the scenario origin [deg] (default: from the file's header)")
+    _add_plugin(c)
 
     tr = sub.add_parser("traffic", help="generate N ships on random crossing routes at environment 5's density")
     tr.add_argument("ships", type=int, help="number of ships (the first is the own ship)")
@@ -301,6 +343,7 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--method", default=registry.DEFAULT, help="every ship's method")
     tr.add_argument("--t-max", type=float, default=PARAMETERS["t_max"].default, help="horizon [L/U]")
     tr.add_argument("--out", type=_path, required=True, help="output scenario file (.toml)")
+    _add_plugin(tr)
 
     ge = sub.add_parser("generate", help="standard encounter sets: situations with targets in requested COLREG "
                         "encounters, as scenario files and maritime-schema traffic situations")
@@ -309,6 +352,7 @@ def build_parser() -> argparse.ArgumentParser:
     ge.add_argument("--situations", type=_int, default=None, help="number of situations (replaces set.situations)")
     ge.add_argument("--seed", type=_int, default=None, help="seed of the set (replaces set.seed)")
     ge.add_argument("--out", type=_path, required=True, help="output directory")
+    _add_plugin(ge)
 
     rp = sub.add_parser("replay", help="AIS tracks (.csv) as a scenario file: the targets replay their recorded "
                         "tracks, the own ship sails hers with a method from a chosen moment")
@@ -322,9 +366,11 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--start", default=None, help="time at which the own ship starts from her recorded state "
                     "(seconds or ISO 8601 as in the file; default her first report)")
     rp.add_argument("--out", type=_path, required=True, help="output scenario file (.toml)")
+    _add_plugin(rp)
 
     pp = sub.add_parser("params", help="list every parameter (default, allowed values, unit, meaning, source)")
     pp.add_argument("--markdown", action="store_true", help="as a Markdown table")
+    _add_plugin(pp)
     return p
 
 
@@ -401,6 +447,13 @@ def _study(a) -> dict:
     if getattr(a, "runs", None) is not None:  # before any work (study paper runs the quick studies first)
         check_runs(a.runs)
     names = QUICK_STUDIES if a.study == "all" else (a.study,)
+    if a.study == "all":  # one run of every quick study: a parameter of any method they run applies
+        with registry.run_of((*(getattr(a, "methods", None) or registry.AVOIDING), "none"), params):
+            return _studies(a, names, params)
+    return _studies(a, names, params)
+
+
+def _studies(a, names, params) -> dict:
     out = {}
     for n in names:
         mod = importlib.import_module(f"studies.{n.replace('-', '_')}")
@@ -458,11 +511,12 @@ def _tune(a) -> dict:
         from tuning import cli_pd  # python-control and the tuning stack: only for 'tune'
         return cli_pd.run(a.out, speed=a.speed, zeta=a.zeta, wn=a.wn, tracking_tolerance=a.tracking_tolerance,
                           vessel=a.vessel)
-    if a.what == "colregs":
+    if a.what in ("colregs", "search"):
         from tuning import colregs  # the tuning stack: only for 'tune'
+        kw = {} if a.what == "colregs" else {"method": a.method, "box": _search_box(a.search)}
         return colregs.run(a.out, design=a.design, holdout=a.holdout, n_candidates=a.candidates, envs=a.envs,
                            params=_params_of(a), failure_weight=a.failure_weight, seed=a.seed,
-                           search_seed=a.search_seed, refine=a.refine, workers=a.workers)
+                           search_seed=a.search_seed, refine=a.refine, workers=a.workers, **kw)
     from tuning import cli_apf  # the tuning stack: only for 'tune'
     try:
         envs = tuple(parse_envs(a.holdout_envs))
@@ -471,6 +525,21 @@ def _tune(a) -> dict:
     return cli_apf.run(a.out, train=a.train, holdout=a.holdout, params=_params_of(a), envs=envs,
                        target=(5,) if 5 in envs else envs[-1:], starts=a.starts, grid=a.grid,
                        max_iter=a.max_iter, workers=a.workers)
+
+
+def _search_box(items) -> dict:
+    """``NAME=LOW:HIGH`` items of ``--search`` as ``{name: (low, high)}`` (checked by the tuner)."""
+    box = {}
+    for item in items:
+        name, sep, rng = item.partition("=")
+        lo, sep2, hi = rng.partition(":")
+        try:
+            box[name.strip()] = (float(lo), float(hi))
+        except ValueError:
+            raise InputError("--search", "NAME=LOW:HIGH with numbers LOW < HIGH", item) from None
+        if not sep or not sep2:
+            raise InputError("--search", "NAME=LOW:HIGH with numbers LOW < HIGH", item)
+    return box
 
 
 def _convert(a) -> dict:
@@ -588,7 +657,7 @@ def _resumable(a) -> bool:
     """Whether the parsed command resumes from the files it has written when it is run again."""
     return (a is not None and (a.command, getattr(a, "study", None) or getattr(a, "what", None)) in
             {("study", "statistics"), ("study", "sweep"), ("study", "paper"), ("tune", "apf"),
-             ("tune", "colregs")})
+             ("tune", "colregs"), ("tune", "search")})
 
 
 def _flag(field: str, a) -> str:
@@ -612,10 +681,15 @@ def main(argv=None) -> int:
     int
         0 on success, 2 for invalid input, 1 for a run error, and the signal's status after an interruption.
     """
-    parser = build_parser()
     a = None
     try:
         with terminate_as_interrupt():
+            argv = list(sys.argv[1:] if argv is None else argv)
+            plugins.load_installed()
+            if argv and argv[0] in _PLUGIN_COMMANDS:  # before parsing: --methods, --set and the help know them
+                for spec in _plugin_specs(argv):
+                    plugins.load(spec)
+            parser = build_parser()
             a, extra = parser.parse_known_args(argv)
             end_deferred_signals()  # a signal received while the package loaded (mmg_casadi/__init__.py)
             if extra:

@@ -37,7 +37,17 @@ from mmg_casadi.vessel.library import VESSELS
 
 GROUPS = ("simulation", "vessel", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "colregs-vortex",
           "walls", "velocity-obstacle", "outcome", "environment")
-"""Parameter groups, in the order of the README table; a method's guidance uses its own group(s)."""
+"""Parameter groups of the shipped table, in the order of the README table; a method's guidance uses its own
+group(s). A method that declares its own parameters (``Method.params``) adds a group
+named after it while it is registered (:func:`groups`)."""
+
+CLOSED_LOOP_GROUPS = ("simulation", "vessel", "ilos", "pd", "walls", "outcome", "environment")
+"""Groups every run reads whatever its methods; every other group holds the parameters of methods (the groups a
+:class:`~mmg_casadi.guidance.methods.Method` lists), which a run may set only if one of its ships uses such a
+method (:func:`mmg_casadi.guidance.methods.check_used`)."""
+
+_METHOD_GROUPS: dict[str, tuple[str, ...]] = {}
+"""Groups added by registered methods: group name -> the names of its parameters (:func:`add_group`)."""
 
 
 @dataclass(frozen=True)
@@ -58,8 +68,9 @@ class Param:
         One line saying what it is.
     source : str
         Where the default comes from: a paper equation or table, or "our choice, because ...".
-    group : str
-        One of :data:`GROUPS`.
+    group : str, optional
+        One of :func:`groups`; a parameter declared with a method (``Method.params``) may leave it empty, the
+        registry sets it to the method's name.
     low_open, high_open : bool
         Whether the bounds are excluded.
     kind : {"float", "int", "choice", "bool"}
@@ -78,7 +89,7 @@ class Param:
     unit: str
     meaning: str
     source: str
-    group: str
+    group: str = ""
     low_open: bool = False
     high_open: bool = False
     kind: str = "float"
@@ -415,9 +426,10 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
 """Every parameter, by name."""
 
 NUMERIC = tuple(n for n, p in PARAMETERS.items() if not p.structural)
-"""Parameters that are numeric inputs of the compiled closed loop (or of the outcome judgement)."""
+"""Parameters of the shipped table that are numeric inputs of the compiled closed loop (or of the outcome
+judgement); a registered method's own parameters are in :data:`PARAMETERS` only."""
 STRUCTURAL = tuple(n for n, p in PARAMETERS.items() if p.structural)
-"""Parameters that select the compiled closed loop's shape."""
+"""Parameters of the shipped table that select the compiled closed loop's shape."""
 
 
 def check_value(name: str, value, *, field: str | None = None, cls=ParameterError):
@@ -526,9 +538,60 @@ def group(name: str) -> tuple[str, ...]:
     >>> group("ilos")
     ('ilos_delta', 'ilos_k')
     """
-    if name not in GROUPS:
-        raise InputError("group", f"one of: {', '.join(GROUPS)}", name)
+    if name not in groups():
+        raise InputError("group", f"one of: {', '.join(groups())}", name)
     return tuple(n for n, p in PARAMETERS.items() if p.group == name)
+
+
+def groups() -> tuple[str, ...]:
+    """Every parameter group: :data:`GROUPS`, then those of registered methods that declare parameters.
+
+    Returns
+    -------
+    tuple of str
+        Group names, in the order of the Markdown table.
+
+    Examples
+    --------
+    >>> groups()[:3]
+    ('simulation', 'vessel', 'ilos')
+    """
+    return GROUPS + tuple(_METHOD_GROUPS)
+
+
+def add_group(name: str, params) -> None:
+    """Enter the parameters a method declares into :data:`PARAMETERS` as group ``name`` (the method's name).
+
+    Called by :func:`mmg_casadi.guidance.methods.register`; nothing is entered when a name is taken.
+
+    Parameters
+    ----------
+    name : str
+        The group: the method's name, not one of :func:`groups`.
+    params : iterable of Param
+        The parameters, each with ``group`` equal to ``name``.
+    """
+    params = tuple(params)
+    if name in groups():
+        raise InputError("method.name", f"a name that is not a parameter group ({', '.join(groups())})", name)
+    taken = [p.name for p in params if p.name in PARAMETERS]
+    if taken:
+        raise InputError("method.params", "parameter names not yet in the table (see `mmg-casadi params`)", taken[0])
+    for p in params:
+        PARAMETERS[p.name] = p
+    _METHOD_GROUPS[name] = tuple(p.name for p in params)
+
+
+def remove_group(name: str) -> None:
+    """Remove a group entered by :func:`add_group` and its parameters from :data:`PARAMETERS` (no-op if absent).
+
+    Parameters
+    ----------
+    name : str
+        The group (a method's name).
+    """
+    for n in _METHOD_GROUPS.pop(name, ()):
+        PARAMETERS.pop(n, None)
 
 
 def field(name: str, attr_unit_scale: float = 1.0):
@@ -574,7 +637,7 @@ def _is_real(v) -> bool:
 
 
 def markdown_table() -> str:
-    """The table as Markdown (name, default, allowed, unit, meaning, source), grouped as in :data:`GROUPS`;
+    """The table as Markdown (name, default, allowed, unit, meaning, source), grouped as in :func:`groups`;
     a ``|`` inside a cell is escaped as ``\\|``.
 
     Returns
@@ -588,7 +651,7 @@ def markdown_table() -> str:
     '| parameter | default | allowed | meaning | source |'
     """
     rows = ["| parameter | default | allowed | meaning | source |", "|---|---|---|---|---|"]
-    for g in GROUPS:
+    for g in groups():
         for n in group(g):
             p = PARAMETERS[n]
             allowed = p.allowed().removeprefix("a number in ").removeprefix("one of: ")

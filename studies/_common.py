@@ -46,6 +46,14 @@ def run_cases(cases: dict, methods, out, params=None, *, title: str = "") -> dic
     methods = registry.parse_list(methods)
     results = {}
     metrics = {"params": resolve(params, prefix="params."), "cases": {}}
+    used = [with_method(sc, m).method_of(i) for sc in cases.values() for m in methods for i in range(len(sc.ships))]
+    with registry.run_of(used, params):
+        _run_cases(cases, methods, out, params, title, results, metrics)
+    write_json(out / "metrics.json", metrics)
+    return metrics
+
+
+def _run_cases(cases: dict, methods, out: Path, params, title: str, results: dict, metrics: dict) -> None:
     for case, sc in cases.items():
         metrics["cases"][case] = {}
         results[case] = {}
@@ -59,8 +67,6 @@ def run_cases(cases: dict, methods, out, params=None, *, title: str = "") -> dic
             print(f"  {case:>14s} {m:>18s}: collision={r.metrics['collision']!s:5s} min distance {dmin:6.2f} L"
                   f"  own CE {own['ce']:.4f} MCTE {own['mcte']:.3f} L", file=sys.stderr)
         plot_comparison(results[case], out / f"{case}.png", title=f"{title} {case}".strip())
-    write_json(out / "metrics.json", metrics)
-    return metrics
 
 
 def plot_comparison(by_method: dict, path, title="") -> Figure:

@@ -596,17 +596,36 @@ def inspect_doc(obj) -> str:
     return inspect.getdoc(obj) or ""
 
 
+def _reexported(target: str) -> str | None:
+    """``module.NAME[.rest]`` where ``module`` re-exports NAME from another module: the name where it is defined."""
+    import importlib
+    parts = target.split(".")
+    for k in range(len(parts) - 1, 1, -1):
+        try:
+            mod = importlib.import_module(".".join(parts[:k]))
+        except ImportError:
+            continue
+        obj = getattr(mod, parts[k], None)
+        home = getattr(obj, "__module__", None)
+        if obj is None or home is None or home == mod.__name__ or not home.startswith("mmg_casadi."):
+            return None
+        return ".".join([home, obj.__qualname__, *parts[k + 1:]])
+    return None
+
+
 def resolve_flat_name(app, env, node, contnode):
-    """Let ``mmg_casadi.NAME`` of the flat API resolve to the object where NAME is defined."""
+    """Let ``mmg_casadi.NAME`` of the flat API, and a name a module re-exports (``mmg_casadi.guidance.methods.Method``
+    of :mod:`mmg_casadi.guidance.contract`), resolve to the object where NAME is defined."""
     target = node.get("reftarget", "")
     if node.get("refdomain") != "py" or not target.startswith("mmg_casadi."):
         return None
     flat = _flat_names().get(target.split(".", 1)[1])
-    if flat is None:
+    where = ".".join(flat) if flat is not None else _reexported(target)
+    if where is None:
         return None
-    node["reftarget"] = ".".join(flat)
+    node["reftarget"] = where
     domain = env.get_domain("py")
-    return domain.resolve_xref(env, node["refdoc"], app.builder, node["reftype"], ".".join(flat), node, contnode)
+    return domain.resolve_xref(env, node["refdoc"], app.builder, node["reftype"], where, node, contnode)
 
 
 def generate(app) -> None:

@@ -72,6 +72,7 @@ from mmg_casadi.closed_loop.problem import ClosedLoopModel, build_problem
 from mmg_casadi.colregs.narrow_channel import rule9
 from mmg_casadi.colregs.profiles import SCORING_PROFILES, scoring_profile
 from mmg_casadi.colregs.scorer import score_encounters
+from mmg_casadi.guidance.methods import forget_on_unregister
 from mmg_casadi.montecarlo.encounter_summary import format_verdicts
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
 from mmg_casadi.montecarlo.failures import failure_mechanism, turn_time_90, unavoidable_at_start
@@ -509,3 +510,6 @@ def _run_disturbances(environment: int, runs, base_seed: int, params: dict | Non
         return [sample_disturbance(environment, r, base_seed, ranges) for r in runs]
     fixed = resolve(params)
     return [{c: fixed[c] for c in ENV_COLUMNS} for _ in runs]
+
+
+forget_on_unregister(_mapped_guidance.cache_clear)

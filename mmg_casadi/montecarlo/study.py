@@ -54,7 +54,7 @@ import numpy as np
 
 from mmg_casadi.colregs.scorer import SCORER_VERSION
 from mmg_casadi.errors import InputError
-from mmg_casadi.guidance import methods as method_registry
+from mmg_casadi.guidance import methods as method_registry, plugins
 from mmg_casadi.io import json_safe, write_json
 from mmg_casadi.limits import check_runs, check_study_size
 from mmg_casadi.montecarlo.batching import (BACKENDS, DEFAULT_BATCH, LocalExecutor, RayExecutor, _check_workers,
@@ -142,6 +142,7 @@ def check_study_args(*, runs=200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS,
     batch_size = _check_int("batch_size", batch_size, 1)
     chunk = _check_int("chunk", chunk, 1)
     resolved = resolve(params, prefix="params.")
+    method_registry.check_run((*methods, "none"), params)  # targets that hold use "none"
     ranges = DisturbanceRanges(current=current, wind=wind)
     for name, rng in (("current", ranges.current), ("wind", ranges.wind)):
         for key in (f"{name}_speed", f"{name}_direction_deg"):
@@ -242,7 +243,7 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
                            ranges=ranges)  # again, under the lock
     _record_study_params(out, params, ranges)
     tasks = plan_batches(envs, methods, runs, done=done, base_seed=base_seed, params=params,
-                         batch_size=batch_size, chunk=chunk, disturbance=ranges)
+                         batch_size=batch_size, chunk=chunk, disturbance=ranges, plugins=plugins.sources())
     log = sys.stderr if progress else None
 
     own_executor = executor is None

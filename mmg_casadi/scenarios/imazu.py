@@ -38,7 +38,7 @@ from mmg_casadi.colregs.roles import classify_roles
 from mmg_casadi.colregs.scorer import judged_encounters
 from mmg_casadi.errors import InputError, check_range
 from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_goal, draw_path, marine_axes
-from mmg_casadi.guidance.methods import NAMES as METHODS
+from mmg_casadi.guidance import methods as registry
 from mmg_casadi.params import PARAMETERS
 from mmg_casadi.scenarios.run import run_scenario
 from mmg_casadi.scenarios.scenario import scenario_from_dict
@@ -114,8 +114,7 @@ def imazu_case(k: int, *, method: str, targets: str = "hold", t_max: float = T_M
     70.0
     """
     k = _check_case(k)
-    if method not in METHODS:
-        raise InputError("method", f"one of: {', '.join(METHODS)}", method)
+    registry.get(method, "method")
     if targets not in TARGET_MODES:
         raise InputError("targets", "one of: hold, avoid", targets)
     meet = np.array([MEET_DISTANCE, 0.0])

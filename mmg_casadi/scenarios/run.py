@@ -61,6 +61,7 @@ from mmg_casadi.colregs.classify import get_profile
 from mmg_casadi.colregs.narrow_channel import rule9
 from mmg_casadi.colregs.scorer import score_encounters
 from mmg_casadi.errors import InputError
+from mmg_casadi.guidance.methods import run_of
 from mmg_casadi.io import json_safe, staged_directory, write_json
 from mmg_casadi.scenarios.scenario import Scenario, load_scenario, with_method
 from mmg_casadi.vessel.library import pair_collision_distance, ship_size
@@ -214,7 +215,8 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
         (:func:`packaged_scenario`).
     params : dict, optional
         Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`); they win over the scenario's
-        ``[settings]``.
+        ``[settings]``. A parameter of a method none of the ships uses is refused
+        (:func:`~mmg_casadi.guidance.methods.check_used`; inside a study, against the study's methods).
     method : str, optional
         Replace the scenario's ``settings.method`` (per-ship overrides are kept).
     profile : ColregProfile or str, optional
@@ -241,7 +243,8 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
     if method is not None:
         sc = with_method(sc, method)
     problem = build_problem(sc, params)
-    traj = simulate(problem.layout, problem.x0, problem.p)
+    with run_of(problem.layout.methods, params):
+        traj = simulate(problem.layout, problem.x0, problem.p)
     return assess(sc, traj, problem.params, profile=profile)
 
 
