@@ -29,13 +29,15 @@ from mmg_casadi.colregs.scorer import Encounter, score_encounters
 from mmg_casadi.colregs.verdict import RULES
 from mmg_casadi.errors import InputError
 from mmg_casadi.montecarlo.disturbance_sampling import DisturbanceRanges
-from mmg_casadi.montecarlo.execution import DEFAULT_CHUNK, PROFILE_COLUMNS, _non_default, run_batch
+from mmg_casadi.montecarlo.execution import (DEFAULT_CHUNK, PROFILE_COLUMNS, _non_default, profile_columns,
+                                             run_batch)
 from mmg_casadi.montecarlo.results import ResultsTable
 from mmg_casadi.montecarlo.sampling import ALL_ENVIRONMENTS
 from mmg_casadi.params import resolve
 
 VERDICT_COLUMNS: tuple[str, ...] = ("colregs_verdicts", *PROFILE_COLUMNS.values())
-"""The cells of a run's row that :attr:`RunExplanation.reproduced` compares."""
+"""The cells of a run's row that :attr:`RunExplanation.reproduced` compares (those the study filled:
+:func:`~mmg_casadi.montecarlo.execution.profile_columns`)."""
 
 
 @dataclass
@@ -83,7 +85,8 @@ class RunExplanation:
         character for character (empty when the study has no row for the run)."""
         if self.stored is None:
             return {}
-        return {c: (self.row.get(c) or "") == (self.stored.get(c) or "") for c in VERDICT_COLUMNS}
+        columns = ("colregs_verdicts", *profile_columns(self.params).values())
+        return {c: (self.row.get(c) or "") == (self.stored.get(c) or "") for c in columns}
 
     def to_dict(self) -> dict:
         """JSON-ready summary: the run, whether it reproduces, its row and every encounter (``Encounter.to_dict``).
