@@ -17,7 +17,7 @@ import mmg_casadi  # noqa: E402
 
 project = "mmg-casadi"
 author = "mmg-casadi contributors"
-copyright = "the mmg-casadi contributors, MIT licence"
+copyright = "the mmg-casadi contributors, BSD-3-Clause licence"
 release = version = mmg_casadi.__version__
 
 extensions = [
