@@ -120,3 +120,27 @@ def test_licence_and_citation():
     assert (ROOT / "LICENSE").read_text().startswith("BSD 3-Clause License")
     cff = (ROOT / "CITATION.cff").read_text()
     assert f"version: {mc.__version__}" in cff and "license: BSD-3-Clause" in cff and "Somayajula" in cff
+
+
+@pytest.mark.parametrize("name", ["run.gif", "run.mp4"])
+def test_animation_of_a_run(tmp_path, name):
+    from mmg_casadi.animation import animate, encounter_roles
+    if name.endswith(".mp4"):
+        pytest.importorskip("imageio_ffmpeg")
+    r = mc.run_scenario("crossing", params={"t_max": 30.0})
+    path = animate(r, tmp_path / name, max_frames=12)
+    assert path.stat().st_size > 1000
+    if name.endswith(".gif"):
+        from PIL import Image
+        with Image.open(path) as im:
+            assert im.n_frames == 12 and im.size == (598, 299)
+    else:
+        assert path.read_bytes()[4:8] == b"ftyp"  # an MP4 container
+    roles = encounter_roles(r.metrics)
+    assert ("ship1", "ship2", "give-way") in [x[:3] for x in roles]
+
+
+def test_animate_refuses_other_files_before_any_work(tmp_path, capsys):
+    assert main(["simulate", "head_on", "--animate", "run.avi", "--out", str(tmp_path / "x")]) == 2
+    assert "--animate: expected a file name ending in .gif or .mp4" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
