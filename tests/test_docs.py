@@ -333,6 +333,9 @@ def check_site(html: Path) -> None:
     theory = (html / "theory.html").read_text(encoding="utf-8")
     assert theory.count('class="math notranslate nohighlight"') >= 15, "theory: too few equations"
     assert "mathjax" in theory.lower()
+    scripts = re.findall(r'<script[^>]+src="([^"]*mathjax[^"]*)"', theory, flags=re.I)
+    assert scripts and all(not s.startswith(("http:", "https:", "//")) for s in scripts), scripts  # offline
+    assert all((html / s.split("?")[0]).exists() for s in scripts), scripts
     for label in ("mmg_nd", "psi_desired", "PD_control", "modified_vortex", "factor_f"):
         assert f'id="equation-{label.lower().replace("_", "-")}"' in theory, f"theory: no equation ({label})"
     assert "mmg_casadi.guidance.velocity_obstacle.velocity_obstacle" in theory
