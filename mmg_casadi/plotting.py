@@ -366,7 +366,8 @@ def _cpa_marks(result, r_safe: float) -> list[tuple[int, int, float, float]]:
 def plot_paths(result, ax, *, title=None, units=None, legend: bool = True, n_outlines: int = 5,
                ticks: float | None = None):
     """Paths of all ships (marine view) with start ○ and goal ☆, hull outlines to scale and time ticks; static
-    obstacles, walls and land; R_safe about the own ship at her closest approach, the closest approach to every
+    obstacles with their R_safe, walls and land; R_safe about the own ship at her closest approach to another ship,
+    the closest approach to every
     ship that came within R_safe joined and labelled; drawn into ``ax``; returns ``ax``.
 
     Parameters
@@ -419,7 +420,7 @@ def plot_paths(result, ax, *, title=None, units=None, legend: bool = True, n_out
             draw_goal(ax, g[0], g[1], c, tol=result.params["goal_tolerance"], units=u)
     drawn = fs.draw_hazards(ax, sc, r_safe, units=u)
     marks = _cpa_marks(result, r_safe)
-    if N + len(sc.obstacles) > 1:
+    if N > 1:  # R_safe about the own ship where she came closest (about an obstacle: drawn with the obstacle)
         k = int(np.argmin(result.own_distance()))
         draw_circle(ax, traj.state("x", 0)[k], traj.state("y", 0)[k], r_safe, units=u)
         drawn["r_safe"] = True

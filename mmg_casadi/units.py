@@ -21,12 +21,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from mmg_casadi.errors import InputError
 
 UNIT_SYSTEMS = ("nd", "si")
 """``nd``: the library's non-dimensional units (L, L/U, U); ``si``: metres, seconds and knots."""
 KNOT = 1852.0 / 3600.0
 """One knot in m/s."""
+
+
+def _scale(x, k: float):
+    """``x`` times ``k``; a list or tuple becomes an array first."""
+    return np.asarray(x, float) * k if isinstance(x, (list, tuple)) else x * k
 
 
 @dataclass(frozen=True)
@@ -103,7 +110,7 @@ class Units:
         float or numpy.ndarray
             The same in the units shown.
         """
-        return x * self.length_m if self.si else x
+        return _scale(x, self.length_m) if self.si else x
 
     def time(self, t):
         """A time in L/U shown in :attr:`time_unit`.
@@ -118,7 +125,7 @@ class Units:
         float or numpy.ndarray
             The same in the units shown.
         """
-        return t * self.length_m / self.speed_m_s if self.si else t
+        return _scale(t, self.length_m / self.speed_m_s) if self.si else t
 
     def speed(self, v):
         """A speed as a fraction of U shown in :attr:`speed_unit`.
@@ -133,7 +140,7 @@ class Units:
         float or numpy.ndarray
             The same in the units shown.
         """
-        return v * self.speed_m_s / KNOT if self.si else v
+        return _scale(v, self.speed_m_s / KNOT) if self.si else v
 
     def fmt_length(self, x: float) -> str:
         """``x`` (L) as text with its unit: ``"5.77 L"`` or ``"1327 m"``.

@@ -91,7 +91,8 @@ def plot_comparison(by_method: dict, path, title="") -> Figure:
     rows = -(-n // cols)
     fig = Figure(figsize=(fs.PAGE, 0.42 * fs.PAGE * rows * 3 / cols + 0.3 * fs.PAGE), layout="constrained")
     gs = fig.add_gridspec(rows + 1, cols, height_ratios=[1.0] * rows + [0.55])
-    dist = fig.add_subplot(gs[rows, :max(cols - 1, 1)])
+    spare = rows * cols > n  # an empty slot in the maps' grid holds the legends
+    dist = fig.add_subplot(gs[rows, :] if spare or cols == 1 else gs[rows, :cols - 1])
     maps, flags = [], dict(collision=False, cpa=False)
     step = tick_step(max(float(r.trajectory.t[-1]) for r in by_method.values()))
     for k, (m, r) in enumerate(by_method.items()):
@@ -126,13 +127,14 @@ def plot_comparison(by_method: dict, path, title="") -> Figure:
                for i, s in enumerate(sc.ships)]
     handles += fs.legend_handles(r_safe=True, obstacle=bool(sc.obstacles), wall=bool(sc.walls), land=bool(sc.land),
                                  ticks=step, **flags)
-    key = fig.add_subplot(gs[rows, cols - 1]) if cols > 1 else None
+    key = fig.add_subplot(gs[rows - 1, cols - 1] if spare else gs[rows, cols - 1]) if cols > 1 else None
     if key is None:
         dist.legend(loc="upper right")
     else:
         key.axis("off")
         lines = dist.get_legend_handles_labels()
-        key.add_artist(key.legend(*lines, loc="upper center", ncols=2, fontsize=5.5, title="own ship's distance"))
+        key.add_artist(key.legend(*lines, loc="upper center", ncols=1 if spare else 2, fontsize=5.5,
+                                  title="own ship's distance"))
         key.legend(handles=handles, loc="lower center", ncols=2, fontsize=5.5)
     if title:
         fig.suptitle(title, fontsize=8.5)

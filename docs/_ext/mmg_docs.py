@@ -5,6 +5,7 @@ On ``builder-inited`` it writes into ``docs/_generated/`` (not in git):
 * ``parameters.md`` — the parameter table, :func:`mmg_casadi.params.markdown_table`;
 * ``flat_api.rst`` — a table of ``mmg_casadi.__all__`` pointing at the modules that define the names;
 * ``claims.md`` — ``docs/claims.md`` when it exists, else a placeholder;
+* ``results_<block>.md`` — the tables of the results file ``docs/results/current.toml`` (:mod:`studies.results`);
 * ``gallery.md`` and ``gallery/<script>/*.png`` (and ``*.gif``) — every script in ``docs/gallery/`` run in its own process
   (``python SCRIPT OUT_DIR``), its figures embedded under its docstring;
 
@@ -589,6 +590,15 @@ def write_result_figures() -> None:
         plot_sweep(rows, param, out)
 
 
+def write_results() -> None:
+    """Every table of the one results file (``docs/results/current.toml``) rendered as the README renders it, into
+    ``_generated/results_<block>.md`` for the {include} directives of ``results.md``."""
+    from studies.results import BLOCKS, load
+    data = load()
+    for name, render in BLOCKS.items():
+        _write(GENERATED / f"results_{name}.md", render(data))
+
+
 def inspect_doc(obj) -> str:
     import inspect
     return inspect.getdoc(obj) or ""
@@ -617,6 +627,7 @@ def generate(app) -> None:
     write_metrics_schema()
     write_scoring_profiles()
     write_result_figures()
+    write_results()
     copy_notebooks()
     build_gallery(app.config.mmg_gallery_workers)
 
