@@ -414,13 +414,12 @@ def _simulate(a) -> dict:
     if a.method:
         sc = with_method(sc, a.method)
     from mmg_casadi.units import Units
-    params = _params_of(a)
-    vessel = (params or {}).get("vessel", PARAMETERS["vessel"].default)
-    units = Units.of(a.units, vessel)
+    Units.of(a.units)  # refused before any work
     if a.animate is not None:
         from mmg_casadi.animation import check_animation_path
         check_animation_path(a.animate)
-    res = run_scenario(sc, params=params)
+    res = run_scenario(sc, params=_params_of(a))
+    units = Units.of(a.units, res.trajectory.layout.unit_vessel())  # the own ship's hull sets L and U
     res.save(a.out, units=units if units.si else None)
     if a.animate is not None:
         from mmg_casadi.animation import animate

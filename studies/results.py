@@ -345,8 +345,9 @@ def imazu_table(data: dict) -> str:
                 q = by.get((p, t, m))
                 cells.append("–" if q is None else f"{q['kept']}/{q['encounters']}")
         lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + f"\n\nThe 22 Imazu problems; safe: the own ship reached her goal and never came within " \
-                              f"the collision distance. Made by: `{rows[0]['command']}`.\n"
+    made = "; ".join(f"`{c}`" for c in dict.fromkeys(r["command"] for r in rows))
+    return "\n".join(lines) + "\n\nThe 22 Imazu problems; safe: the own ship reached her goal and never came within " \
+                              f"the collision distance. Made by: {made}.\n"
 
 
 def quick_table(data: dict) -> str:
@@ -468,7 +469,7 @@ def blocks(text: str) -> dict:
 
 
 def main(argv=None) -> int:
-    """``python -m studies.results collect ... | render`` (module docstring).
+    """The command line of this module, ``python -m studies.results``: ``collect`` or ``render`` (module notes).
 
     Parameters
     ----------

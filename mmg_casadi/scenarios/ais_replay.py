@@ -55,8 +55,8 @@ TARGETS = ("route", "track")
 """The horizon is this many times the recording's duration (room for the own ship's detours; ours)."""
 REPLAY_METHOD = "colregs-vortex"
 """The own ship's method unless one is chosen. A replayed route has a waypoint every ``step_s`` (60 s: 1.9 L at
-14 kn), and the paper's fields put their sink at the next waypoint: within a few L its pull |Λ|/(2π r) (about
-4 U at 4 L) dwarfs the vortex (a few tenths of U), the paper's near-goal failure, so the modified vortex cannot
+14 kn), and the paper's fields put their sink at the next waypoint: within a few L its pull, ``abs(Λ) / (2π r)``
+(about 4 U at 4 L), dwarfs the vortex (a few tenths of U), the paper's near-goal failure, so the modified vortex cannot
 give way (in the shipped sample it passes the target at 0.74 L; with the own ship's last waypoint alone, 5.57 L).
 colregs-vortex caps the goal's pull while it avoids (``cv_d_att_floor``) and counts waypoints passed abeam as
 passed, so it sails such routes as they are (4.18 L in the sample)."""
