@@ -318,7 +318,7 @@ def classify(F: ca.Function, point) -> tuple[np.ndarray, str]:
 def grid_stagnation_cells(F: ca.Function, box, *, n: int = 400, exclude=(), jumps: bool = False) -> np.ndarray:
     """Brute force: the cells of an ``n`` × ``n`` grid over ``box`` in which both components of the field change
     sign, neighbouring cells merged, kept where a 41 × 41 sampling of the group's cells (and one cell around) comes
-    within 5 % of its largest \|V\| of zero (a stagnation point), or, with ``jumps``, where it does not (the field
+    within 5 % of its largest ``|V|`` of zero (a stagnation point), or, with ``jumps``, where it does not (the field
     jumps across zero at a switch, as the modified vortex's does, without vanishing).
 
     Parameters
@@ -337,7 +337,7 @@ def grid_stagnation_cells(F: ca.Function, box, *, n: int = 400, exclude=(), jump
     Returns
     -------
     numpy.ndarray (k, 2)
-        One point per group of neighbouring cells (the sample point of least \|V\|), sorted by x then y.
+        One point per group of neighbouring cells (the sample point of least ``|V|``), sorted by x then y.
     """
     x0, x1, y0, y1 = box
     xs, ys = np.linspace(x0, x1, n), np.linspace(y0, y1, n)
