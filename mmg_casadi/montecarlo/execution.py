@@ -378,7 +378,7 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
                              collision_with=own["collision_with"], goals=goals, obstacles=obstacles,
                              positions_at_collision=at, turn_time=turn_time_90(float(P["delta_max_deg"])),
                              near_goal_distance=float(P["near_goal_distance"]), unavoidable=unavoidable)
-    return {"failure_mechanism": mech,
+    return {"failure_mechanism": mech, **dict.fromkeys(PROFILE_COLUMNS.values(), ""),  # "" for a profile not scored
             **own_ship_encounters(t, states, P["colregs_profile"],
                                   alternatives=tuple(SCORING_PROFILES) if P["colregs_all_profiles"] else
                                   (P["colregs_profile"],)),
