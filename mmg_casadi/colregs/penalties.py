@@ -49,6 +49,10 @@ def ramp(x, lo, hi):
     >>> ramp(np.array([1.0, 2.0, 3.0, 5.0]), 2.0, 4.0).tolist(), float(ramp(2.0, 2.0, 2.0))
     ([0.0, 0.0, 0.5, 1.0], 1.0)
     """
+    if isinstance(x, float):  # a plain number: the same arithmetic without numpy's overhead
+        if hi <= lo:
+            return np.float64(1.0 if x >= hi else 0.0)
+        return np.float64(min(max((x - lo) / (hi - lo), 0.0), 1.0))
     x = np.asarray(x, dtype=float)
     if hi <= lo:
         return (x >= hi).astype(float)
