@@ -387,7 +387,7 @@ def prepare(t, pos, psi, speed=None, active=None, *, own=None) -> Prepared:
 
 
 def score_prepared(prep: Prepared, profile=None, *, names=None, applicable_only: bool = False) -> list[Encounter]:
-    """:func:`score_encounters` of a :func:`prepare`\ d trajectory under ``profile``.
+    """:func:`score_encounters` of a trajectory from :func:`prepare` under ``profile``.
 
     Parameters
     ----------
