@@ -6,6 +6,9 @@ The flat public API::
     r = mc.run_scenario("head_on.toml", params={"k_vor0": -15})
     r.metrics, r.plot(), r.to_pandas(), r.save("out")
 
+A method of one's own is a builder, a :class:`Method` and :func:`register` (or a plugin file loaded with
+:func:`load_plugin` / ``--plugin``); the contract is in :mod:`mmg_casadi.guidance.methods`.
+
 Examples
 --------
 >>> import mmg_casadi as mc
@@ -24,14 +27,21 @@ if ((getattr(_sys, "argv", None) or [""])[0].endswith("mmg-casadi")
 
 _PUBLIC = {
     "Layout": ("mmg_casadi.closed_loop.layout", "Layout"),
+    "Command": ("mmg_casadi.guidance.contract", "Command"),
+    "GuidanceInputs": ("mmg_casadi.guidance.contract", "GuidanceInputs"),
+    "Method": ("mmg_casadi.guidance.contract", "Method"),
     "ClosedLoopModel": ("mmg_casadi.closed_loop.problem", "ClosedLoopModel"),
     "Problem": ("mmg_casadi.closed_loop.problem", "Problem"),
     "build_problem": ("mmg_casadi.closed_loop.problem", "build_problem"),
     "Trajectory": ("mmg_casadi.closed_loop.simulation", "Trajectory"),
     "simulate": ("mmg_casadi.closed_loop.simulation", "simulate"),
     "METHODS": ("mmg_casadi.guidance.methods", "METHODS"),
+    "register": ("mmg_casadi.guidance.methods", "register"),
+    "unregister": ("mmg_casadi.guidance.methods", "unregister"),
+    "load_plugin": ("mmg_casadi.guidance.plugins", "load"),
     "run_study": ("mmg_casadi.montecarlo.study", "run_study"),
     "PARAMETERS": ("mmg_casadi.params", "PARAMETERS"),
+    "Param": ("mmg_casadi.params", "Param"),
     "load_params": ("mmg_casadi.params", "load_file"),
     "resolve_params": ("mmg_casadi.params", "resolve"),
     "ScenarioResult": ("mmg_casadi.scenarios.run", "ScenarioResult"),

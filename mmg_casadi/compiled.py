@@ -37,6 +37,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import casadi as ca
@@ -54,6 +55,11 @@ STOP_TIMEOUT = 10.0
 """Seconds to wait for the watchdog to stop the compiler and remove the build folder after an interruption."""
 RECORD_SUFFIX = ".sha256"
 """Suffix of a library's hash record (``<library>.so.sha256``: the hexadecimal SHA-256 of the library)."""
+
+NOTICES = {"stream": None}
+"""Where :func:`compile_function` says that it compiles (one line per library: what, then the seconds it took): a
+file, ``"stderr"`` (whatever ``sys.stderr`` is at the time), or ``None`` for silence (the default of the library;
+the command line sets ``"stderr"`` unless ``--quiet``). Nothing is said when the library is cached."""
 
 _SWEPT: set[Path] = set()
 """Cache directories whose stale build folders this process has removed (once per process)."""
@@ -163,7 +169,7 @@ def library_path(f: ca.Function, flags=DEFAULT_FLAGS, also=()) -> tuple[Path, st
     return cache_dir() / f"{f.name()}_{key}.so", src
 
 
-def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
+def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=(), *, label: str | None = None):
     """Return a natively compiled equivalent of ``f``, compiling only when the cache has no library for it.
 
     With ``also``, one library holds ``f`` and those Functions (their shared code compiled once) and the
@@ -181,6 +187,8 @@ def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
         C compiler flags passed to the compiler.
     also : sequence of casadi.Function, optional
         Further Functions to compile into the same library.
+    label : str, optional
+        What is compiled, in words, for the notice of :data:`NOTICES` (default: the Function's name).
 
     Returns
     -------
@@ -196,7 +204,18 @@ def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
     """
     so, src = library_path(f, flags, also)
     if not library_is_trusted(so):
-        _build(f.name(), src, so, flags)
+        stream = sys.stderr if NOTICES["stream"] == "stderr" else NOTICES["stream"]
+        if stream is not None:
+            print(f"compiling {label or f.name()} … ", end="", file=stream, flush=True)
+        t0 = time.perf_counter()
+        try:
+            _build(f.name(), src, so, flags)
+        except BaseException:
+            if stream is not None:
+                print("stopped", file=stream, flush=True)
+            raise
+        if stream is not None:
+            print(f"{time.perf_counter() - t0:.0f} s (cached for next time)", file=stream, flush=True)
     compiled = load_library(so, [g.name() for g in (f, *also)])
     return compiled if also else compiled[0]
 

@@ -36,7 +36,17 @@ from mmg_casadi.vessel.library import VESSELS
 
 GROUPS = ("simulation", "vessel", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "colregs-vortex",
           "walls", "velocity-obstacle", "outcome", "environment")
-"""Parameter groups, in the order of the README table; a method's guidance uses its own group(s)."""
+"""Parameter groups of the shipped table, in the order of the README table; a method's guidance uses its own
+group(s). A method that declares its own parameters (``Method.params``) adds a group
+named after it while it is registered (:func:`groups`)."""
+
+CLOSED_LOOP_GROUPS = ("simulation", "vessel", "ilos", "pd", "walls", "outcome", "environment")
+"""Groups every run reads whatever its methods; every other group holds the parameters of methods (the groups a
+:class:`~mmg_casadi.guidance.methods.Method` lists), which a run may set only if one of its ships uses such a
+method (:func:`mmg_casadi.guidance.methods.check_used`)."""
+
+_METHOD_GROUPS: dict[str, tuple[str, ...]] = {}
+"""Groups added by registered methods: group name -> the names of its parameters (:func:`add_group`)."""
 
 
 @dataclass(frozen=True)
@@ -57,8 +67,9 @@ class Param:
         One line saying what it is.
     source : str
         Where the default comes from: a paper equation or table, or "our choice, because ...".
-    group : str
-        One of :data:`GROUPS`.
+    group : str, optional
+        One of :func:`groups`; a parameter declared with a method (``Method.params``) may leave it empty, the
+        registry sets it to the method's name.
     low_open, high_open : bool
         Whether the bounds are excluded.
     kind : {"float", "int", "choice", "bool"}
@@ -77,7 +88,7 @@ class Param:
     unit: str
     meaning: str
     source: str
-    group: str
+    group: str = ""
     low_open: bool = False
     high_open: bool = False
     kind: str = "float"
@@ -242,7 +253,8 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "stand-on ship acts alone (Rule 17(a)(ii))", "Cockcroft & Lameijer, A Guide to the Collision Avoidance "
        "Rules, 7th ed., on Rule 17: in open sea a give-way ship that has not acted by about 2 nm in a crossing of "
        "two merchant ships has usually waited too long, i.e. when a substantial alteration no longer completes "
-       "well before the CPA; for the KCS a 60° alteration takes 3.7 L/U (≈ 75 s at 4 L/U)", "colregs-vortex",
+       "well before the CPA; for the KCS a 60° alteration takes 3.7 L/U (≈ 75 s at 4 L/U); the iitm-lab scoring "
+       "profile's late_tcpa has the same number, which this default does not read", "colregs-vortex",
        low_open=True),
     _P("cv_r_act", 8.0, 0.0, None, "L", "range below which the overtaken ship acts alone whatever the TCPA (slowly "
        "closing overtakers), and within which a stand-on ship keeping her course circles a static obstacle", "our choice: 4 collision distances", "colregs-vortex", low_open=True),
@@ -251,13 +263,16 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
     _P("cv_k_standon", 1.0, 0.0, None, "L/(L/U)", "strength of the stand-on escape term at the trigger",
        "our choice: the paper's sink (Λ = −100) at the 15 L detection range", "colregs-vortex", low_open=True),
     _P("cv_dpsi_min_deg", 30.0, 0.0, 90.0, "deg", "smallest alteration from the heading at the onset of a give-way "
-       "duty or of the stand-on action (Rule 8, readily apparent)", "NTNU evaluator's Δχ_app (Hagen et al. 2023 configuration)",
-       "colregs-vortex"),
+       "duty or of the stand-on action (Rule 8, readily apparent)", "our choice: an alteration another ship sees at "
+       "once by eye and radar (Rule 8(b)); Cockcroft & Lameijer (p. 51) count alterations under 10° unlikely to be "
+       "readily apparent, and the KCS completes 30° in 2.5 L/U; the published evaluators' readily apparent "
+       "alteration (Hagen et al. 2023) has the same number, which this default does not read", "colregs-vortex"),
     _P("cv_d_risk", 4.0, 0.0, None, "L", "risk of collision (Rule 7), the onset of an encounter: a ship within R_safe "
        "whose straight-line passing distance at the present velocities is below this while the range closes; a "
        "head-on or crossing give-way ship alters at least until her straight line passes at this (Rule 16)",
        "our choice: twice the paper's 2 L collision distance (§Statistical Analysis), a passing with less than one "
-       "collision distance of clearance, as the iitm-lab scoring profile's gate", "colregs-vortex", low_open=True),
+       "collision distance of clearance (the iitm-lab scoring profile's gate d_risk has the same number; this "
+       "default does not read it)", "colregs-vortex", low_open=True),
     _P("cv_r_look", 0.0, 0.0, None, "L", "how far beyond R_safe colregs-vortex sees a ship it must give way to "
        "(head-on, crossing from starboard, overtaking): with a risk of collision (cv_d_risk) within R_safe + cv_r_look "
        "such a ship opens the give-way duty there, and the method steers while that encounter lasts; stand-on "
@@ -301,8 +316,10 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "smallest alteration Cockcroft & Lameijer (p. 51) count as readily apparent (tests/test_colregs_vortex.py)",
        "colregs-vortex", low_open=True),
     _P("cv_speed_cut", 0.5, 0.0, 1.0, "", "fraction of the propeller speed a stand-on ship takes off while she acts "
-       "alone for a ship crossing from port (Rule 17(a)(ii), with the starboard escape)", "Hagen et al. 2023 "
-       "(evaluator.yaml) delta_speed_reduction_app: a 50 % speed reduction is readily apparent", "colregs-vortex",
+       "alone for a ship crossing from port (Rule 17(a)(ii), with the starboard escape)", "our choice: half the "
+       "propeller speed, the engine order from full to half ahead (Rule 8(b), (e)); the published evaluators' "
+       "readily apparent speed reduction (Hagen et al. 2023) has the same number, which this default does not read",
+       "colregs-vortex",
        high_open=True),
     _P("cv_speed_giveway", 0.0, 0.0, 1.0, "", "fraction of the propeller speed a give-way ship takes off while her "
        "alteration alone still leads into close quarters (passing distance below cv_d_cpa_act at a TCPA below "
@@ -367,12 +384,18 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "our choice: where the sink's pull |Λ|/r_g (Λ = −100) still beats the modified vortex f|K⁰|/d at the "
        "collision distance d = 2 L with f = 2 (K⁰ = −10): r_g < 10 L (paper §Limitations, 2nd mechanism)",
        "outcome", low_open=True),
-    _P("colregs_profile", "iitm-lab", None, None, "", "thresholds of the COLREG encounter scorer "
+    _P("colregs_profile", "published", None, None, "", "thresholds of the COLREG encounter scorer "
        "(mmg_casadi.colregs.scorer: Rule 7 risk gate, encounter sectors, graded Rules 8, 13-17) in metrics.json "
        "'encounters' and the Monte Carlo's colregs_risky/colregs_lawful/colregs_score",
-       "iitm-lab: the paper laboratory's R_safe, collision distance and head-on sector (paper Table 3, "
+       "published: the thresholds of Woerner et al. 2019 and Hagen et al. 2023 with seamanship distances and "
+       "timing (Cockcroft & Lameijer); iitm-lab: the paper laboratory's R_safe, collision distance and head-on "
+       "sector (paper Table 3, "
        "§Statistical Analysis); ntnu-2023: Hagen et al. 2023 (Ocean Eng. 288); every threshold's source in "
        "mmg_casadi.colregs.profiles", "outcome", kind="choice", choices=tuple(SCORING_PROFILES)),
+    _P("colregs_all_profiles", False, None, None, "", "score every run of a statistics study under every scoring "
+       "profile (runs.csv colregs_verdicts_<profile>, colregs.csv, summary.md), not only colregs_profile; about 2.5 "
+       "times the scorer's time", "our choice: off, so that the scorer adds at most 10 % to a study "
+       "(benchmarks/colregs_scoring.py)", "outcome", kind="bool"),
     _P("targets", "avoid", None, None, "", "what the sampled target ships of the statistical study do: 'avoid' "
        "(every ship uses the study's method) or 'hold' (ships other than the own ship hold course and speed, "
        "method 'none'); only the study's sampled scenarios read it", "avoid: the paper's statistical analysis; "
@@ -406,9 +429,10 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
 """Every parameter, by name."""
 
 NUMERIC = tuple(n for n, p in PARAMETERS.items() if not p.structural)
-"""Parameters that are numeric inputs of the compiled closed loop (or of the outcome judgement)."""
+"""Parameters of the shipped table that are numeric inputs of the compiled closed loop (or of the outcome
+judgement); a registered method's own parameters are in :data:`PARAMETERS` only."""
 STRUCTURAL = tuple(n for n, p in PARAMETERS.items() if p.structural)
-"""Parameters that select the compiled closed loop's shape."""
+"""Parameters of the shipped table that select the compiled closed loop's shape."""
 
 
 def check_value(name: str, value, *, field: str | None = None, cls=ParameterError):
@@ -517,9 +541,60 @@ def group(name: str) -> tuple[str, ...]:
     >>> group("ilos")
     ('ilos_delta', 'ilos_k')
     """
-    if name not in GROUPS:
-        raise InputError("group", f"one of: {', '.join(GROUPS)}", name)
+    if name not in groups():
+        raise InputError("group", f"one of: {', '.join(groups())}", name)
     return tuple(n for n, p in PARAMETERS.items() if p.group == name)
+
+
+def groups() -> tuple[str, ...]:
+    """Every parameter group: :data:`GROUPS`, then those of registered methods that declare parameters.
+
+    Returns
+    -------
+    tuple of str
+        Group names, in the order of the Markdown table.
+
+    Examples
+    --------
+    >>> groups()[:3]
+    ('simulation', 'vessel', 'ilos')
+    """
+    return GROUPS + tuple(_METHOD_GROUPS)
+
+
+def add_group(name: str, params) -> None:
+    """Enter the parameters a method declares into :data:`PARAMETERS` as group ``name`` (the method's name).
+
+    Called by :func:`mmg_casadi.guidance.methods.register`; nothing is entered when a name is taken.
+
+    Parameters
+    ----------
+    name : str
+        The group: the method's name, not one of :func:`groups`.
+    params : iterable of Param
+        The parameters, each with ``group`` equal to ``name``.
+    """
+    params = tuple(params)
+    if name in groups():
+        raise InputError("method.name", f"a name that is not a parameter group ({', '.join(groups())})", name)
+    taken = [p.name for p in params if p.name in PARAMETERS]
+    if taken:
+        raise InputError("method.params", "parameter names not yet in the table (see `mmg-casadi params`)", taken[0])
+    for p in params:
+        PARAMETERS[p.name] = p
+    _METHOD_GROUPS[name] = tuple(p.name for p in params)
+
+
+def remove_group(name: str) -> None:
+    """Remove a group entered by :func:`add_group` and its parameters from :data:`PARAMETERS` (no-op if absent).
+
+    Parameters
+    ----------
+    name : str
+        The group (a method's name).
+    """
+    for n in _METHOD_GROUPS.pop(name, ()):
+        PARAMETERS.pop(n, None)
 
 
 def field(name: str, attr_unit_scale: float = 1.0):
@@ -565,7 +640,7 @@ def _is_real(v) -> bool:
 
 
 def markdown_table() -> str:
-    """The table as Markdown (name, default, allowed, unit, meaning, source), grouped as in :data:`GROUPS`;
+    """The table as Markdown (name, default, allowed, unit, meaning, source), grouped as in :func:`groups`;
     a ``|`` inside a cell is escaped as ``\\|``.
 
     Returns
@@ -579,7 +654,7 @@ def markdown_table() -> str:
     '| parameter | default | allowed | meaning | source |'
     """
     rows = ["| parameter | default | allowed | meaning | source |", "|---|---|---|---|---|"]
-    for g in GROUPS:
+    for g in groups():
         for n in group(g):
             p = PARAMETERS[n]
             allowed = p.allowed().removeprefix("a number in ").removeprefix("one of: ")

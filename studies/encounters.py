@@ -239,24 +239,27 @@ def run(out, *, set_dir, methods=None, targets: str = "hold", params=None) -> di
     if record.is_file():  # read by requested_types above: valid JSON
         generation = load_json(record, "generation record").get("stats")
     situations, encounters = [], []
-    for m in methods:
-        safe = 0
-        for name, sc in cases:
-            t0 = time.perf_counter()
-            res = run_scenario(_with_targets(sc, m, targets), params)
-            wall = time.perf_counter() - t0
-            own = res.metrics["ships"][0]
-            enc = _encounter_rows(res, name, m, requested.get(name, []))
-            risky = [e for e in enc if e["applicable"]]
-            row = {"situation": name, "method": m, "targets": targets, "ships": len(sc.ships),
-                   "safe": bool(own["reached_goal"] and not own["collided"]), "reached_goal": bool(own["reached_goal"]),
-                   "collided": bool(own["collided"]), "min_distance": float(np.min(res.own_distance())),
-                   "delay": own["delay"], "encounters": len(risky), "kept": sum(bool(e["compliant"]) for e in risky),
-                   "wall_s": wall}
-            safe += row["safe"]
-            situations.append(row)
-            encounters += enc
-        print(f"  encounters targets {targets} {m:>18s}: own ship safe in {safe}/{len(cases)}", file=sys.stderr)
+    with registry.run_of((*methods, "none"), params):
+        for m in methods:
+            safe = 0
+            for name, sc in cases:
+                t0 = time.perf_counter()
+                res = run_scenario(_with_targets(sc, m, targets), params)
+                wall = time.perf_counter() - t0
+                own = res.metrics["ships"][0]
+                enc = _encounter_rows(res, name, m, requested.get(name, []))
+                risky = [e for e in enc if e["applicable"]]
+                row = {"situation": name, "method": m, "targets": targets, "ships": len(sc.ships),
+                       "safe": bool(own["reached_goal"] and not own["collided"]),
+                       "reached_goal": bool(own["reached_goal"]),
+                       "collided": bool(own["collided"]), "min_distance": float(np.min(res.own_distance())),
+                       "delay": own["delay"], "encounters": len(risky),
+                       "kept": sum(bool(e["compliant"]) for e in risky),
+                       "wall_s": wall}
+                safe += row["safe"]
+                situations.append(row)
+                encounters += enc
+            print(f"  encounters targets {targets} {m:>18s}: own ship safe in {safe}/{len(cases)}", file=sys.stderr)
     summary = summarize(situations, encounters, methods, targets=targets, generation=generation)
     out = Path(out)
     write_text(out / "situations.csv", _csv(SITUATION_COLUMNS, situations))

@@ -74,27 +74,29 @@ def run(out, *, methods=None, params=None, targets: str = "both") -> dict:
         raise InputError("targets", "one of: hold, avoid, both", targets)
     methods = registry.parse_list(methods or DEFAULT_METHODS)
     resolved = resolve(params, prefix="params.")
+    registry.check_run((*methods, "none"), params)  # before anything is written
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     metrics = {"params": resolved, "cases": list(CASES), "results": {}}
-    for tg in (TARGETS if targets == "both" else (targets,)):
-        for m in methods:
-            rows = run_imazu(m, tg, params=params)
-            plot_imazu(rows, out / f"{tg}_{m}.png", title=f"Imazu problems, {m}, targets {tg}")
-            encounters = [e for r in rows for e in r["encounters"]]
-            metrics["results"].setdefault(tg, {})[m] = {
-                "safe": sum(r["safe"] for r in rows), "encounters": len(encounters),
-                "kept": sum(1 for e in encounters if e["compliant"]),
-                "compliant_cases": sum(1 for r in rows if r["encounters"] and all(e["compliant"]
-                                                                                 for e in r["encounters"])),
-                "cases": [{"case": r["case"], "safe": r["safe"], "reached_goal": r["reached_goal"],
-                           "min_distance": r["min_distance"], "collided": r["collided"],
-                           "encounters": r["encounters"]} for r in rows]}
-            unsafe = [r["case"] for r in rows if not r["safe"]]
-            res = metrics["results"][tg][m]
-            print(f"  imazu targets {tg:5s} {m:>18s}: own ship safe in {len(rows) - len(unsafe)}/{len(rows)}"
-                  + (f" (not: {unsafe})" if unsafe else "") + f", risky encounters kept {res['kept']}/"
-                  f"{res['encounters']}", file=sys.stderr)
+    with registry.run_of((*methods, "none"), params):
+        for tg in (TARGETS if targets == "both" else (targets,)):
+            for m in methods:
+                rows = run_imazu(m, tg, params=params)
+                plot_imazu(rows, out / f"{tg}_{m}.png", title=f"Imazu problems, {m}, targets {tg}")
+                encounters = [e for r in rows for e in r["encounters"]]
+                metrics["results"].setdefault(tg, {})[m] = {
+                    "safe": sum(r["safe"] for r in rows), "encounters": len(encounters),
+                    "kept": sum(1 for e in encounters if e["compliant"]),
+                    "compliant_cases": sum(1 for r in rows if r["encounters"] and all(e["compliant"]
+                                                                                     for e in r["encounters"])),
+                    "cases": [{"case": r["case"], "safe": r["safe"], "reached_goal": r["reached_goal"],
+                               "min_distance": r["min_distance"], "collided": r["collided"],
+                               "encounters": r["encounters"]} for r in rows]}
+                unsafe = [r["case"] for r in rows if not r["safe"]]
+                res = metrics["results"][tg][m]
+                print(f"  imazu targets {tg:5s} {m:>18s}: own ship safe in {len(rows) - len(unsafe)}/{len(rows)}"
+                      + (f" (not: {unsafe})" if unsafe else "") + f", risky encounters kept {res['kept']}/"
+                      f"{res['encounters']}", file=sys.stderr)
     write_text(out / "imazu.md", _table(metrics["results"]))
     write_json(out / "metrics.json", metrics)
     return metrics

@@ -34,7 +34,7 @@ from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.colregs.scorer import judged_encounters
 from mmg_casadi.io import write_json, write_text
 from mmg_casadi.scenarios import encounters
-from mmg_casadi.guidance.methods import PAPER_STATISTICS
+from mmg_casadi.guidance.methods import AVOIDING, PAPER_STATISTICS, run_of
 from mmg_casadi.montecarlo.study import check_resumable, check_study_args, run_study
 from mmg_casadi.montecarlo.results import ResultsTable
 
@@ -75,6 +75,12 @@ def run(out, *, runs: int = PAPER_RUNS, base_seed: int = 0, params=None, workers
     dict
         ``{"runs", "claims"}``.
     """
+    with run_of((*AVOIDING, "none"), params):  # the quick studies run every avoiding method
+        return _run(out, runs=runs, base_seed=base_seed, params=params, workers=workers, envs=envs,
+                    progress=progress)
+
+
+def _run(out, *, runs, base_seed, params, workers, envs, progress) -> dict:
     args = check_study_args(runs=runs, envs=envs, methods=PAPER_STATISTICS, base_seed=base_seed, params=params,
                             workers=workers)  # before the quick studies: bad input is refused at once
     check_resumable(Path(out) / "statistics", runs=args["runs"], envs=args["envs"], methods=args["methods"],

@@ -29,25 +29,25 @@ def _two_ships(offset, heading_b=180.0, method="none"):
 
 def test_colregs_profile_is_a_table_parameter():
     p = PARAMETERS["colregs_profile"]
-    assert (p.default, p.kind, p.group, p.choices) == ("iitm-lab", "choice", "outcome", tuple(SCORING_PROFILES))
+    assert (p.default, p.kind, p.group, p.choices) == ("published", "choice", "outcome", tuple(SCORING_PROFILES))
     assert resolve({"colregs_profile": "ntnu-2023"})["colregs_profile"] == "ntnu-2023"
-    with pytest.raises(InputError, match=r"^colregs_profile: expected one of: iitm-lab, ntnu-2023, got 'woerner'$"):
+    with pytest.raises(InputError, match=r"^colregs_profile: expected one of: published, iitm-lab, ntnu-2023, got 'woerner'$"):
         resolve({"colregs_profile": "woerner"})
 
 
 @pytest.mark.parametrize("offset", [0.0, 2.5])
 def test_head_on_on_a_collision_course_is_one_unlawful_encounter_per_ship(offset):
-    # 0 L (they collide) or 2.5 L abeam (< d_risk = 4 L), nobody alters course: Rule 14 broken by both
+    # 0 L (they collide) or 2.5 L abeam (< d_risk, 1 nm), nobody alters course: Rule 14 broken by both
     r = run_scenario(_two_ships(offset))
     pair = r.metrics["pairs"][0]
     for side, own in (("a", "a"), ("b", "b")):
         (e,) = pair["encounters"][side]
         assert (e["own"], e["applicable"], e["encounter"], e["role"], e["profile"]) == (own, True, "head-on",
-                                                                                        "head-on", "iitm-lab")
+                                                                                        "head-on", "published")
         assert e["compliant"] is False and e["rules"]["14"]["verdict"] is False and e["score"] < 0.5
         assert set(e["rules"]) == set(RULES) and e["onset"]["cpa"] == pytest.approx(offset, abs=0.05)
     assert pair["encounter"] == "head-on" and pair["compliant"] is False  # the legacy keys are still there
-    assert json.loads(json.dumps(r.metrics))["params"]["colregs_profile"] == "iitm-lab"
+    assert json.loads(json.dumps(r.metrics))["params"]["colregs_profile"] == "published"
     row = run_scenarios([_two_ships(offset)], time_guidance_calls=False)[0]
     assert (row["colregs_risky"], row["colregs_lawful"]) == (1, 0)
     assert row["colregs_score"] == pytest.approx(pair["encounters"]["a"][0]["score"], abs=0.05)
@@ -100,4 +100,4 @@ def test_cli_records_the_profile(tmp_path, capsys):
     assert metrics["params"]["colregs_profile"] == "ntnu-2023"
     assert {e["profile"] for side in "ab" for e in metrics["pairs"][0]["encounters"][side]} == {"ntnu-2023"}
     assert main(["simulate", str(path), "--set", "colregs_profile=strict", "--out", str(out)]) == 2
-    assert "colregs_profile: expected one of: iitm-lab, ntnu-2023" in capsys.readouterr().err
+    assert "colregs_profile: expected one of: published, iitm-lab, ntnu-2023" in capsys.readouterr().err

@@ -313,14 +313,14 @@ def test_within_r_safe_of_a_waypoint_ilos_turns_at_full_rate(r_safe, status):
 def mid_turn_crossing(method):
     # the own ship starts heading east (090°) for a goal due north, a port turn of 90° that ILOS steers; a ship
     # from her port side, also colregs-vortex, enters R_safe on a collision course with her new course mid-turn
-    return scenario_from_dict({"settings": {"method": method, "t_max": 80.0}, "ships": [
+    return scenario_from_dict({"settings": {"method": method, "t_max": 80.0, "colregs_profile": "iitm-lab"}, "ships": [
         {"name": "own", "start": [0, 0], "heading": 90, "speed": 1.0, "waypoints": [[60, 0]]},
         {"name": "other", "start": [10, -14], "heading": 90, "speed": 1.0, "waypoints": [[10, 40]]}]})
 
 
 def test_a_stand_on_encounter_that_opens_mid_turn_finds_a_swing_she_can_check():
-    """The mid-turn crossing: turning at the moderate rate she checks her swing within the 10° of Rule 17(a)(i)
-    and keeps every rule; the same method turning at full rate (no turn limit under ILOS) swings on past 20° to
+    """The mid-turn crossing (judged under the laboratory profile): turning at the moderate rate she checks her
+    swing within the 10° of Rule 17(a)(i) and keeps every rule; the same method turning at full rate (no turn limit under ILOS) swings on past 20° to
     port at the onset of risk and breaks 17(a)(i), 17(a)(ii) and 17(c)."""
     (e,) = run_scenario(mid_turn_crossing("colregs-vortex")).metrics["pairs"][0]["encounters"]["a"]
     assert e["role"] == "stand-on" and e["compliant"]

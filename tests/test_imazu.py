@@ -147,7 +147,7 @@ def test_under_ntnu_2023_the_ample_time_of_a_duty_to_act_has_ended_at_the_start_
 
 
 def test_stand_on_bound_turns_at_the_earliest_lawful_time_and_finds_the_widest_passing():
-    (row,) = stand_on_bound(4)  # one ship crossing from 45° on the port bow at the own speed
+    (row,) = stand_on_bound(4, profile="iitm-lab")  # one ship crossing from 45° on the port bow at the own speed
     assert row["role"] == "stand-on" and row["t_late"] == 36.0  # TCPA 4 of the iitm-lab profile
     assert row["range_late"] == pytest.approx(4 * math.hypot(math.cos(math.pi / 4) - 1, math.sin(math.pi / 4)))
     turn = turning_circle(35.0, t_end=10.0)
@@ -163,7 +163,7 @@ def test_stand_on_bound_turns_at_the_earliest_lawful_time_and_finds_the_widest_p
 
 
 def test_stand_on_bound_a_slowly_closing_crosser_is_within_a_ship_length_when_her_inaction_is_apparent():
-    rows = stand_on_bound(10)
+    rows = stand_on_bound(10, profile="iitm-lab")
     assert [r["role"] for r in rows] == ["give-way", "stand-on"]
     slow = rows[1]
     assert slow["range_late"] < 1.1 and slow["passing"] < 2.0 and not slow["safe"]

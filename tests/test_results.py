@@ -38,6 +38,8 @@ def _row(env: int, method: str, run: int, success: bool = True, **extra) -> dict
         "colregs_verdicts": ";".join(f"{j + 1}:give-way:0.5:8={int(j < run % 3 // 2)}" for j in range(run % 3)),
         "colregs_rule9": math.nan if run % 2 else 0.25 + run / 101,
     }
+    for profile in ("published", "iitm_lab", "ntnu_2023"):
+        row[f"colregs_verdicts_{profile}"] = row["colregs_verdicts"]
     row.update(extra)
     return row
 
@@ -263,11 +265,17 @@ def test_table_of_the_previous_version_is_refused(tmp_path):
     version_3 = (*RUN_COLUMNS[:RUN_COLUMNS.index("colregs_risky")], "colregs_compliant", "colregs_encounters",
                  "colregs_risky", "colregs_lawful", "colregs_score")
     path.write_text(",".join(version_3) + "\n")
-    with pytest.raises(InputError, match="older version, without the columns colregs_verdicts, colregs_rule9;"):
+    with pytest.raises(InputError, match="older version, without the columns colregs_verdicts, colregs_rule9, "
+                                         "colregs_verdicts_published"):
         ResultsTable(path).read()
     version_4 = RUN_COLUMNS[:RUN_COLUMNS.index("colregs_rule9")]
     path.write_text(",".join(version_4) + "\n")
-    with pytest.raises(InputError, match="older version, without the columns colregs_rule9;"):
+    with pytest.raises(InputError, match="older version, without the columns colregs_rule9, colregs_verdicts_pub"):
+        ResultsTable(path).read()
+    version_5 = RUN_COLUMNS[:RUN_COLUMNS.index("colregs_verdicts_published")]
+    path.write_text(",".join(version_5) + "\n")
+    with pytest.raises(InputError, match="older version, without the columns colregs_verdicts_published, "
+                                         "colregs_verdicts_iitm_lab, colregs_verdicts_ntnu_2023;"):
         ResultsTable(path).read()
 
 

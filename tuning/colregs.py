@@ -1,5 +1,6 @@
 """``mmg-casadi tune colregs``: search colregs-vortex's thresholds for safety plus COLREG compliance, judge the best
-set against the defaults on paired held-out runs.
+set against the defaults on paired held-out runs; ``mmg-casadi tune search`` does the same for any registered
+method (a plugin's included) and a box of its numeric parameters (``--method M --search NAME=LO:HI ...``).
 
 The stand-on and give-way logic of colregs-vortex (:mod:`mmg_casadi.guidance.colregs_vortex`) switches on
 thresholds (TCPA, passing distance, range, alteration) whose effect on the scorer's verdicts is a step function
@@ -41,6 +42,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.guidance import methods as registry
 from mmg_casadi.io import atomic_open, write_json, write_text
 from mmg_casadi.limits import check_runs
 from mmg_casadi.montecarlo.encounter_summary import compare_encounters, summarize_encounters
@@ -101,8 +103,8 @@ def objective(rows, *, failure_weight: float = FAILURE_WEIGHT) -> dict:
             "objective": compliance - failure_weight * (1.0 - success)}
 
 
-def candidates(n: int, seed: int = 0) -> list[dict]:
-    """The defaults, then ``n`` points of a scrambled Latin hypercube over :data:`SEARCH_BOX`.
+def candidates(n: int, seed: int = 0, box: dict | None = None) -> list[dict]:
+    """The defaults, then ``n`` points of a scrambled Latin hypercube over :data:`SEARCH_BOX` (or ``box``).
 
     Parameters
     ----------
@@ -110,6 +112,8 @@ def candidates(n: int, seed: int = 0) -> list[dict]:
         Points besides the defaults (≥ 0).
     seed : int
         Seed of the hypercube.
+    box : dict, optional
+        Parameter name to ``(low, high)``; default :data:`SEARCH_BOX`.
 
     Returns
     -------
@@ -124,25 +128,28 @@ def candidates(n: int, seed: int = 0) -> list[dict]:
     >>> all(SEARCH_BOX[k][0] <= v <= SEARCH_BOX[k][1] for p in c[1:] for k, v in p.items())
     True
     """
-    names = list(SEARCH_BOX)
+    box = SEARCH_BOX if box is None else box
+    names = list(box)
     out = [{k: float(PARAMETERS[k].default) for k in names}]
     if n:
-        lo, hi = np.array([SEARCH_BOX[k] for k in names]).T
+        lo, hi = np.array([box[k] for k in names]).T
         pts = qmc.scale(qmc.LatinHypercube(d=len(names), seed=seed).random(n), lo, hi)
         out += [{k: round(float(v), 4) for k, v in zip(names, p)} for p in pts]
     return out
 
 
-def neighbours(point: dict, step: float) -> list[dict]:
+def neighbours(point: dict, step: float, box: dict | None = None) -> list[dict]:
     """The coordinate neighbours of ``point``: each tuned threshold moved by ``±step`` of its box width (clipped to
-    :data:`SEARCH_BOX`), the others kept; a step that the box clips away entirely is left out.
+    :data:`SEARCH_BOX` or ``box``), the others kept; a step that the box clips away entirely is left out.
 
     Parameters
     ----------
     point : dict
-        Values of the :data:`SEARCH_BOX` thresholds.
+        Values of the box's parameters.
     step : float
         Fraction of each box width.
+    box : dict, optional
+        Parameter name to ``(low, high)``; default :data:`SEARCH_BOX`.
 
     Returns
     -------
@@ -156,7 +163,7 @@ def neighbours(point: dict, step: float) -> list[dict]:
     [2.5, 5.5]
     """
     out = []
-    for k, (lo, hi) in SEARCH_BOX.items():
+    for k, (lo, hi) in (SEARCH_BOX if box is None else box).items():
         for sign in (-1.0, 1.0):
             v = round(min(max(point[k] + sign * step * (hi - lo), lo), hi), 4)
             if v != point[k]:
@@ -169,9 +176,9 @@ def _best(table: list[dict]) -> dict:
     return max(table, key=lambda r: (r["objective"], -r["candidate"]))
 
 
-def _rows(d: Path, envs, lo: int, hi: int) -> list[dict]:
+def _rows(d: Path, envs, lo: int, hi: int, method: str = METHOD) -> list[dict]:
     return [r for r in ResultsTable(d / "runs.csv").read()
-            if lo <= r["run"] < hi and r["environment"] in envs and r["method"] == METHOD]
+            if lo <= r["run"] < hi and r["environment"] in envs and r["method"] == method]
 
 
 def judge(tuned_rows, default_rows, *, alpha: float = 0.05) -> dict:
@@ -219,8 +226,8 @@ def judge(tuned_rows, default_rows, *, alpha: float = 0.05) -> dict:
             "compliance": compliance}
 
 
-def _write_candidates(path: Path, table: list[dict]) -> None:
-    cols = ["candidate", *SEARCH_BOX, "runs", "success", "encounters", "compliance", "stand_on", "give_way",
+def _write_candidates(path: Path, table: list[dict], box: dict) -> None:
+    cols = ["candidate", *box, "runs", "success", "encounters", "compliance", "stand_on", "give_way",
             "objective"]
     with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=cols)
@@ -228,7 +235,7 @@ def _write_candidates(path: Path, table: list[dict]) -> None:
         w.writerows({c: row[c] for c in cols} for row in table)
 
 
-def write_params(path: Path, best: dict, *, verdict: str, summary: str) -> None:
+def write_params(path: Path, best: dict, *, verdict: str, summary: str, method: str = METHOD) -> None:
     """``params.toml`` with the best thresholds and, as comments, the held-out verdict against the defaults.
 
     Parameters
@@ -236,14 +243,18 @@ def write_params(path: Path, best: dict, *, verdict: str, summary: str) -> None:
     path : pathlib.Path
         Output file.
     best : dict
-        The thresholds of :data:`SEARCH_BOX`.
+        The tuned parameters (those of :data:`SEARCH_BOX` for colregs-vortex).
     verdict : str
         ``"improvement"``, ``"no improvement"`` or ``"not judged"``.
     summary : str
         Comment lines.
+    method : str, default 'colregs-vortex'
+        The tuned method.
     """
-    judge_params(path, {k: best[k] for k in SEARCH_BOX},
-                 title="colregs-vortex thresholds from `mmg-casadi tune colregs` (tuning/colregs.py)",
+    title = ("colregs-vortex thresholds from `mmg-casadi tune colregs` (tuning/colregs.py)" if method == METHOD
+             else f"{method} parameters from `mmg-casadi tune search` (tuning/colregs.py)")
+    judge_params(path, dict(best),
+                 title=title,
                  baseline="the defaults", caveat="the defaults; keep the defaults unless you have another reason",
                  verdict=verdict, summary=summary)
 
@@ -277,9 +288,51 @@ def _markdown(report: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def check_box(method: str, box) -> dict:
+    """A search box for ``method``: each name a numeric, non-structural parameter the method reads, each interval
+    inside the parameter's range with ``low < high`` and the default inside it.
+
+    Parameters
+    ----------
+    method : str
+        A registered method.
+    box : dict
+        Parameter name to ``(low, high)``.
+
+    Returns
+    -------
+    dict
+        The box, floats.
+
+    Examples
+    --------
+    >>> check_box("colregs-vortex", {"cv_t_act": (2, 8)})
+    {'cv_t_act': (2.0, 8.0)}
+    >>> check_box("modified-vortex", {"cv_t_act": (2, 8)})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.InputError: search.cv_t_act: expected a numeric parameter that modified-vortex reads (...), got 'cv_t_act'
+    """
+    registry.get(method, "method")
+    if not isinstance(box, dict) or not box:
+        raise InputError("search", "at least one NAME=LOW:HIGH", box)
+    out = {}
+    for k, bounds in box.items():
+        p = PARAMETERS.get(k)
+        if p is None or p.structural or p.kind != "float" or method not in registry.owners(k):
+            reads = [n for n, q in PARAMETERS.items() if method in registry.owners(n) and not q.structural
+                     and q.kind == "float"]
+            raise InputError(f"search.{k}", f"a numeric parameter that {method} reads ({', '.join(reads)})", k)
+        lo, hi = (p.check(float(v), field=f"search.{k}", cls=InputError) for v in bounds)
+        if not lo < hi or not lo <= p.default <= hi:
+            raise InputError(f"search.{k}", f"LOW < HIGH around the default {p.default:g}", f"{lo:g}:{hi:g}")
+        out[k] = (lo, hi)
+    return out
+
+
 def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16, envs="5", params=None,
         failure_weight: float = FAILURE_WEIGHT, seed: int = 0, search_seed: int = 0, refine: int = 1,
-        workers: int | None = None) -> dict:
+        workers: int | None = None, method: str = METHOD, box: dict | None = None) -> dict:
     """Search, then judge on paired held-out runs; return the report (also written to ``out``).
 
     Parameters
@@ -307,6 +360,10 @@ def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16,
         its box width (then 1/8, ...) one at a time (:func:`neighbours`).
     workers : int, optional
         Local worker processes.
+    method : str, default 'colregs-vortex'
+        The tuned method (every ship of the sampled scenarios uses it).
+    box : dict, optional
+        The searched parameters, name to ``(low, high)`` (:func:`check_box`); default :data:`SEARCH_BOX`.
 
     Returns
     -------
@@ -325,29 +382,32 @@ def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16,
     check_runs(design + holdout, "design + holdout")
     if not (isinstance(failure_weight, (int, float)) and np.isfinite(failure_weight) and failure_weight >= 0):
         raise InputError("failure_weight", "a finite number >= 0", failure_weight)
+    box = SEARCH_BOX if box is None and method == METHOD else check_box(method, box)
     fixed = {k: v for k, v in (params or {}).items() if v != PARAMETERS[k].default}
-    clash = sorted(set(fixed) & set(SEARCH_BOX))
+    clash = sorted(set(fixed) & set(box))
     if clash:
-        raise InputError("params", f"no tuned threshold ({', '.join(SEARCH_BOX)}); drop --set {clash[0]}",
+        raise InputError("params", f"no tuned threshold ({', '.join(box)}); drop --set {clash[0]}",
                          clash[0])
-    args = check_study_args(runs=design + holdout, envs=envs, methods=(METHOD,), base_seed=seed, params=fixed,
+    args = check_study_args(runs=design + holdout, envs=envs, methods=(method,), base_seed=seed, params=fixed,
                             workers=workers)
     envs = tuple(args["envs"])
     out = Path(out)
-    sets = candidates(n_candidates, search_seed)
+    sets = candidates(n_candidates, search_seed, box)
     for i, cand in enumerate(sets):
-        full = check_study_args(runs=design, envs=envs, methods=(METHOD,), base_seed=seed,
+        full = check_study_args(runs=design, envs=envs, methods=(method,), base_seed=seed,
                                 params={**fixed, **cand})["params"]
-        check_resumable(out / "candidates" / f"c{i:02d}", runs=design, envs=envs, methods=(METHOD,),
+        check_resumable(out / "candidates" / f"c{i:02d}", runs=design, envs=envs, methods=(method,),
                         base_seed=seed, params=full)
     settings = {"design": design, "envs": list(envs), "seed": seed, "params": fixed, "search_seed": search_seed,
                 "failure_weight": failure_weight, "candidates": n_candidates, "refine": refine}
+    if method != METHOD or box != SEARCH_BOX:  # tune colregs keeps its settings file as it was
+        settings.update(method=method, search_box={k: list(v) for k, v in box.items()})
     check_settings(out / "tuning.json", settings)
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "tuning.json", settings)
     t_start = time.perf_counter()
 
-    say(f"[1/2] design: {len(sets)} candidates x {design} runs of environments {list(envs)} ({METHOD}, seed "
+    say(f"[1/2] design: {len(sets)} candidates x {design} runs of environments {list(envs)} ({method}, seed "
         f"{seed}), then {refine} coordinate sweep(s) around the best")
     table = []
 
@@ -355,9 +415,9 @@ def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16,
         i = len(table)
         d = out / "candidates" / f"c{i:02d}"
         say(f"  candidate {i}: {cand}")
-        run_study(d, runs=design, envs=envs, methods=(METHOD,), base_seed=seed, params={**fixed, **cand},
+        run_study(d, runs=design, envs=envs, methods=(method,), base_seed=seed, params={**fixed, **cand},
                   workers=workers)
-        score = objective(_rows(d, envs, 0, design), failure_weight=failure_weight)
+        score = objective(_rows(d, envs, 0, design, method), failure_weight=failure_weight)
         table.append({"candidate": i, **cand, **score})
         say(f"    success {score['success']:.4f}, compliance {score['compliance']:.4f} (stand-on "
             f"{score['stand_on']:.4f}), objective {score['objective']:.4f}")
@@ -366,36 +426,38 @@ def run(out, *, design: int = 1000, holdout: int = 4000, n_candidates: int = 16,
         evaluate(cand)
     for k in range(refine):
         best = _best(table)
-        seen = [{n: row[n] for n in SEARCH_BOX} for row in table]
-        for cand in neighbours(seen[best["candidate"]], 0.25 / 2 ** k):
+        seen = [{n: row[n] for n in box} for row in table]
+        for cand in neighbours(seen[best["candidate"]], 0.25 / 2 ** k, box):
             if cand not in seen:
                 evaluate(cand)
-    _write_candidates(out / "candidates.csv", table)
+    _write_candidates(out / "candidates.csv", table, box)
     best = _best(table)
-    best_params = {k: best[k] for k in SEARCH_BOX}
+    best_params = {k: best[k] for k in box}
     t_design = time.perf_counter() - t_start
 
     judgement, summary = None, "the search kept the defaults"
     if best["candidate"]:
-        write_params(out / "params.toml", best_params, verdict="not judged", summary="held-out runs not finished")
+        write_params(out / "params.toml", best_params, verdict="not judged", summary="held-out runs not finished",
+                     method=method)
         say(f"[2/2] held out: runs {design}-{design + holdout - 1}, defaults vs candidate {best['candidate']}")
         rows = {}
         for i in (0, best["candidate"]):
             d = out / "candidates" / f"c{i:02d}"
-            run_study(d, runs=design + holdout, envs=envs, methods=(METHOD,), base_seed=seed,
-                      params={**fixed, **{k: table[i][k] for k in SEARCH_BOX}}, workers=workers)
-            rows[i] = _rows(d, envs, design, design + holdout)
+            run_study(d, runs=design + holdout, envs=envs, methods=(method,), base_seed=seed,
+                      params={**fixed, **{k: table[i][k] for k in box}}, workers=workers)
+            rows[i] = _rows(d, envs, design, design + holdout, method)
         judgement = judge(rows[best["candidate"]], rows[0])
         s, c = judgement["success"], judgement["compliance"]
         summary = (f"held out {s['runs']} runs: success {s['default']:.4f} -> {s['tuned']:.4f} (p = "
                    f"{s['p_value']:.3g}); compliance over {c['pairs']} encounters {c['rate_b']:.4f} -> "
                    f"{c['rate_a']:.4f} (p = {c['p_value']:.3g})")
     write_params(out / "params.toml", best_params,
-                 verdict=judgement["verdict"] if judgement else "no improvement", summary=summary)
-    report = {"command": "tune colregs", "method": METHOD, "envs": list(envs), "seed": seed, "design": design,
+                 verdict=judgement["verdict"] if judgement else "no improvement", summary=summary, method=method)
+    report = {"command": "tune colregs" if method == METHOD and box == SEARCH_BOX else "tune search",
+              "method": method, "envs": list(envs), "seed": seed, "design": design,
               "holdout": holdout, "search_seed": search_seed, "refine": refine, "failure_weight": failure_weight,
               "params": fixed,
-              "search_box": {k: list(v) for k, v in SEARCH_BOX.items()}, "candidates": table,
+              "search_box": {k: list(v) for k, v in box.items()}, "candidates": table,
               "best": best["candidate"], "params_best": best_params, "judgement": judgement,
               "timings": {"design_s": t_design, "total_s": time.perf_counter() - t_start},
               "files": {"params": str(out / "params.toml"), "candidates": str(out / "candidates.csv"),

@@ -5,7 +5,8 @@ On ``builder-inited`` it writes into ``docs/_generated/`` (not in git):
 * ``parameters.md`` — the parameter table, :func:`mmg_casadi.params.markdown_table`;
 * ``flat_api.rst`` — a table of ``mmg_casadi.__all__`` pointing at the modules that define the names;
 * ``claims.md`` — ``docs/claims.md`` when it exists, else a placeholder;
-* ``gallery.md`` and ``gallery/<script>/*.png`` — every script in ``docs/gallery/`` run in its own process
+* ``results_<block>.md`` — the tables of the results file ``docs/results/current.toml`` (:mod:`studies.results`);
+* ``gallery.md`` and ``gallery/<script>/*.png`` (and ``*.gif``) — every script in ``docs/gallery/`` run in its own process
   (``python SCRIPT OUT_DIR``), its figures embedded under its docstring;
 
 and copies ``notebooks/*.ipynb`` into ``docs/notebooks/`` so that myst-nb executes them. A gallery script that
@@ -133,10 +134,15 @@ def _script_doc(script: Path) -> tuple[str, str]:
     return title.strip(), body.strip()
 
 
+def _figures(out: Path) -> list[Path]:
+    """The figures (PNG) and animations (GIF) a gallery script wrote, in name order."""
+    return sorted([*out.glob("*.png"), *out.glob("*.gif")])
+
+
 def _run_script(script: Path, out: Path, stamp: str) -> tuple[Path, float, str | None]:
     """Run ``script`` into ``out`` unless the stamp says its figures are current; returns (script, seconds, error)."""
     done = out / ".stamp"
-    if done.exists() and done.read_text() == stamp and any(out.glob("*.png")):
+    if done.exists() and done.read_text() == stamp and _figures(out):
         return script, 0.0, None
     shutil.rmtree(out, ignore_errors=True)
     out.mkdir(parents=True)
@@ -147,8 +153,8 @@ def _run_script(script: Path, out: Path, stamp: str) -> tuple[Path, float, str |
     seconds = time.perf_counter() - t0
     if proc.returncode != 0:
         return script, seconds, (proc.stderr or proc.stdout)[-3000:]
-    if not any(out.glob("*.png")):
-        return script, seconds, "wrote no PNG into its output directory"
+    if not _figures(out):
+        return script, seconds, "wrote no PNG or GIF into its output directory"
     done.write_text(stamp)
     return script, seconds, None
 
@@ -171,9 +177,10 @@ def build_gallery(workers: int) -> None:
             logger.info("gallery: %s ran in %.1f s", script.name, seconds)
         title, body = _script_doc(script)
         parts = [f"## {title}", "", body, ""]
-        for png in sorted(out.glob("*.png")):
+        for png in _figures(out):
             rel = png.relative_to(DOCS).as_posix()
-            parts += [f":::{{figure}} /{rel}", ":width: 100%", "", f"`{png.name}` (short run)", ":::", ""]
+            what = "animation" if png.suffix == ".gif" else "short run"
+            parts += [f":::{{figure}} /{rel}", ":width: 100%", "", f"`{png.name}` ({what})", ":::", ""]
         parts += [f"Short-run script: `docs/gallery/{script.name}`", ""]
         sections.append("\n".join(parts))
     _write(GENERATED / "gallery.md", "\n".join(sections))
@@ -289,14 +296,20 @@ RUN_COLUMN_DOCS = {
     "colregs_lawful": ("int", "encounter scorer: of those, the ones it was compliant in"),
     "colregs_score": ("float", "encounter scorer: mean graded score of those encounters (0–1)"),
     "colregs_compliant": ("bool", "encounter scorer: every risky encounter kept (empty without one; secondary)"),
-    "colregs_verdicts": ("str", "encounter scorer: each risky encounter as `other:role:score:rule=0|1/...`, "
-                         "encounters separated by `;` (`mmg_casadi.montecarlo.encounter_summary`)"),
+    "colregs_verdicts": ("str", "encounter scorer: each risky encounter as `other:role:score:rule=0|1/...` "
+                         "(`:e` appended where an excuse by a give-way duty to another ship changed a verdict), "
+                         "encounters separated by `;` (`mmg_casadi.montecarlo.encounter_summary`); profile "
+                         "`colregs_profile`"),
+    "colregs_verdicts_published": ("str", "the same encounters' verdicts under the `published` profile"),
+    "colregs_verdicts_iitm_lab": ("str", "the same under the `iitm-lab` profile"),
+    "colregs_verdicts_ntnu_2023": ("str", "the same under the `ntnu-2023` profile"),
     "colregs_rule9": ("float", "COLREG Rule 9(a): the own ship's share of her time in a narrow channel on its "
                       "starboard side (kept from 0.9; `mmg_casadi.colregs.narrow_channel`); empty when she was "
                       "never in one"),
 }
 
 ENCOUNTER_DOCS = {
+    "profile": "the scoring profile whose verdicts the row counts (`colregs_verdicts_<profile>`)",
     "environment": "environment", "method": "method",
     "group": "`all`, a role (`head-on`, `give-way`, `stand-on`, `overtaking`, `overtaken`) or a rule "
              "(`rule 8` … `rule 17c`)",
@@ -304,9 +317,11 @@ ENCOUNTER_DOCS = {
     "kept": "of those, the ones kept (every applicable rule; for a rule: that rule)",
     "rate": "`kept / n`", "ci_low": "Wilson 95 % interval, low", "ci_high": "Wilson 95 % interval, high",
     "score_mean": "mean graded score of the group's encounters (0–1)",
+    "excused": "of the group's encounters, those whose verdict an excuse by a give-way duty to another ship changed",
 }
 
 PAIR_DOCS = {
+    "profile": "the scoring profile of both methods' verdicts",
     "environment": "environment", "method_a": "method A", "method_b": "method B",
     "pairs": "encounters both methods had: same run, same other ship, same occurrence",
     "rate_a": "A's compliance over the pairs", "rate_b": "B's compliance over the pairs",
@@ -583,22 +598,50 @@ def write_result_figures() -> None:
         plot_sweep(rows, param, out)
 
 
+def write_results() -> None:
+    """Every table of the one results file (``docs/results/current.toml``) rendered as the README renders it, into
+    ``_generated/results_<block>.md`` for the {include} directives of ``results.md``."""
+    from studies.results import BLOCKS, load
+    data = load()
+    for name, render in BLOCKS.items():
+        _write(GENERATED / f"results_{name}.md", render(data))
+
+
 def inspect_doc(obj) -> str:
     import inspect
     return inspect.getdoc(obj) or ""
 
 
+def _reexported(target: str) -> str | None:
+    """``module.NAME[.rest]`` where ``module`` re-exports NAME from another module: the name where it is defined."""
+    import importlib
+    parts = target.split(".")
+    for k in range(len(parts) - 1, 1, -1):
+        try:
+            mod = importlib.import_module(".".join(parts[:k]))
+        except ImportError:
+            continue
+        obj = getattr(mod, parts[k], None)
+        home = getattr(obj, "__module__", None)
+        if obj is None or home is None or home == mod.__name__ or not home.startswith("mmg_casadi."):
+            return None
+        return ".".join([home, obj.__qualname__, *parts[k + 1:]])
+    return None
+
+
 def resolve_flat_name(app, env, node, contnode):
-    """Let ``mmg_casadi.NAME`` of the flat API resolve to the object where NAME is defined."""
+    """Let ``mmg_casadi.NAME`` of the flat API, and a name a module re-exports (``mmg_casadi.guidance.methods.Method``
+    of :mod:`mmg_casadi.guidance.contract`), resolve to the object where NAME is defined."""
     target = node.get("reftarget", "")
     if node.get("refdomain") != "py" or not target.startswith("mmg_casadi."):
         return None
     flat = _flat_names().get(target.split(".", 1)[1])
-    if flat is None:
+    where = ".".join(flat) if flat is not None else _reexported(target)
+    if where is None:
         return None
-    node["reftarget"] = ".".join(flat)
+    node["reftarget"] = where
     domain = env.get_domain("py")
-    return domain.resolve_xref(env, node["refdoc"], app.builder, node["reftype"], ".".join(flat), node, contnode)
+    return domain.resolve_xref(env, node["refdoc"], app.builder, node["reftype"], where, node, contnode)
 
 
 def generate(app) -> None:
@@ -611,6 +654,7 @@ def generate(app) -> None:
     write_metrics_schema()
     write_scoring_profiles()
     write_result_figures()
+    write_results()
     copy_notebooks()
     build_gallery(app.config.mmg_gallery_workers)
 

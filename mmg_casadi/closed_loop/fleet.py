@@ -35,6 +35,7 @@ import numpy as np
 
 from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, SHIP_PARAMS, Layout
 from mmg_casadi.closed_loop.step import _ROW, ENVELOPE, NAUX, _models, _ship_update, meet, ship_kinematics
+from mmg_casadi.guidance.methods import forget_on_unregister
 from mmg_casadi.vessel.library import pair_collision_distance
 
 AGENT_ROWS = 6
@@ -256,3 +257,6 @@ def build_fleet_step(layout: Layout) -> ca.Function:
     clock = ca.if_else(running, t + p[GLOBAL_PARAMS.index("dt")], t)
     return ca.Function(f"fleet_{key}", [x, p, nbr], [ca.vertcat(clock, ca.vec(X_next)), aux],
                        ["x", "p", "nbr"], ["x_next", "aux"])
+
+
+forget_on_unregister(_ship_functions.cache_clear, build_fleet_step.cache_clear)

@@ -12,6 +12,7 @@ Numeric parameters (gains, field constants, speeds, paths, obstacles, walls) are
 from __future__ import annotations
 
 import functools
+import hashlib
 import itertools
 import math
 from dataclasses import dataclass
@@ -63,6 +64,11 @@ which its side touches a wall), its length (L; two ships collide within ``collis
 length, :func:`~mmg_casadi.vessel.library.pair_collision_distance`), the engine's time constant (L/U) and the
 range of propeller speeds a method may command (rev/min). Length and beam are the ship's own (``length_m``,
 ``beam_m``) or its vessel's (:func:`~mmg_casadi.vessel.library.ship_size`)."""
+
+COMMAND_ROWS = ("command_heading", "command_rpm")
+"""State rows of a layout with commanded ships (:attr:`Layout.commanded`): the heading ordered (rad) and, with
+:attr:`Layout.command_rpm`, the propeller speed ordered (rev/min); every ship has them, the step carries them
+unchanged and only the commanded ships read them."""
 
 ENV_INPUTS = ("V_c", "beta_c", "U_w", "psi_w", "crab")
 """Trailing numeric inputs of a disturbed step (:attr:`Layout.disturbed`): the model's disturbance ``env =
@@ -119,6 +125,20 @@ class Layout:
         colregs-vortex's in-extremis speed test is part of the step (``cv_speed_extremis > 0``); without it the
         cut it would weigh is zero, so the step leaves the test out (it is the costliest part of the method's
         guidance).
+    options : tuple of (str, object)
+        The structural parameters declared by the layout's methods (``Method.params`` with ``structural``), as
+        ``(name, value)`` pairs in registry order; a builder reads them with :meth:`option`. Empty for the
+        shipped methods, which leaves the layout's step and key as without this field.
+    commanded : tuple of int
+        Indices of the ships steered from outside, increasing (:mod:`mmg_casadi.gym`,
+        :func:`~mmg_casadi.closed_loop.simulation.simulate` with ``commands``): at every step such a ship's PD
+        controller steers the heading in her state row ``command_heading`` (rad) and, with ``command_rpm``, her
+        engine follows the propeller speed in ``command_rpm`` (rev/min, clipped to dead slow ahead .. maximum
+        rpm), else her leg's service speed exactly; the step carries both rows unchanged, the caller writes them. No ILOS, no method, no walls'
+        field. Empty: the layout's step and key are as without this field. Not with replayed ships' indices nor
+        the fleet step.
+    command_rpm : bool
+        The commanded ships also order their propeller speed (the state row ``command_rpm``).
     """
 
     methods: tuple
@@ -137,11 +157,42 @@ class Layout:
     replay: tuple = ()
     max_track: int = 0
     cv_extremis: bool = False
+    options: tuple = ()
+    commanded: tuple = ()
+    command_rpm: bool = False
 
     def __post_init__(self):
         if not 0 <= self.n_land <= self.n_walls:
             raise ValueError(f"n_land: expected 0 to n_walls = {self.n_walls} land edges, got {self.n_land}")
         self._check_replay()
+        object.__setattr__(self, "options", tuple((str(k), v) for k, v in self.options))
+        object.__setattr__(self, "commanded", tuple(int(i) for i in self.commanded))
+        c = self.commanded
+        if list(c) != sorted(set(c)) or any(not 0 <= i < self.n_ships for i in c) or set(c) & set(self.replay):
+            raise ValueError(f"commanded: expected increasing ship indices in [0, {self.n_ships}) that are not "
+                             f"replayed, got {c}")
+        if c and self.neighbours:
+            raise ValueError("commanded: expected no neighbour slots (the fleet step takes no commands)")
+        if self.command_rpm and not c:
+            raise ValueError("command_rpm: expected False without commanded ships")
+
+    def option(self, name: str):
+        """The value of the structural method parameter ``name`` in this layout (:attr:`options`).
+
+        Parameters
+        ----------
+        name : str
+            A structural parameter declared by one of the layout's methods.
+
+        Returns
+        -------
+        object
+            Its value.
+        """
+        for k, v in self.options:
+            if k == name:
+                return v
+        raise KeyError(f"{name}: not a structural parameter of this layout's methods ({dict(self.options)})")
 
     def _check_replay(self) -> None:
         """The replayed ships are distinct ship indices in increasing order, with a padded track of at least two
@@ -201,6 +252,8 @@ class Layout:
         out = []
         for n, m in methods.METHODS.items():
             out += [k for k in m.memory if n in used and k not in out]
+        if self.commanded:
+            out += [k for k in COMMAND_ROWS[:1 + int(self.command_rpm)] if k not in out]
         return tuple(out)
 
     @functools.cached_property
@@ -301,7 +354,7 @@ class Layout:
         :class:`mmg_casadi.guidance.methods.Method`, then, with walls, its ``wall_inputs``, and with land
         ``grounding_margin``; each once), after the others in the parameter vector."""
         used = set(self.methods)
-        names = [k for n, m in methods.METHODS.items() if n in used for k in m.inputs]
+        names = [k for n, m in methods.METHODS.items() if n in used for k in m.step_inputs]
         if self.n_walls:
             names += [k for n, m in methods.METHODS.items() if n in used for k in m.wall_inputs]
         if self.n_land:
@@ -347,6 +400,10 @@ class Layout:
             s += "".join(f"_r{i}" for i in self.replay) + f"t{self.max_track}"
         if self.cv_extremis:
             s += "_cx"
+        if self.options:
+            s += "_m" + hashlib.sha256(repr(self.options).encode()).hexdigest()[:8]
+        if self.commanded:
+            s += "".join(f"_c{i}" for i in self.commanded) + ("rpm" if self.command_rpm else "")
         return (f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}"
                 f"{'h' if self.vo_hold else ''}{s}")
 
@@ -554,7 +611,7 @@ def step_values(resolved: dict) -> dict:
         src = _DEG_INPUTS.get(name)
         out[name] = math.radians(float(resolved[src])) if src else float(resolved[name])
     for m in methods.METHODS.values():
-        for name in m.inputs + m.wall_inputs:
+        for name in m.step_inputs + m.wall_inputs:
             out[name] = math.radians(float(resolved[name + "_deg"])) if name not in resolved else float(resolved[name])
     for name in ("engine_rate_rpm_s", "engine_lag_s", "engine_dead_slow", "engine_rpm_max", "grounding_margin"):
         out[name] = float(resolved[name])

@@ -14,7 +14,7 @@ import casadi as ca
 
 from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, Layout
 from mmg_casadi.guidance import methods
-from mmg_casadi.guidance.methods import GuidanceInputs, command_vector
+from mmg_casadi.guidance.methods import GuidanceInputs, command_vector, forget_on_unregister
 
 SLOTS = (1, 2, 4)
 """Neighbour counts for which :func:`within_range` has a gathered branch (more active ones: all M)."""
@@ -120,3 +120,6 @@ def within_range(layout: Layout, method: str, m: int) -> ca.Function:
     xm = [ca.MX.sym(f"a{n}", *cond.size_in(n)) for n in range(cond.n_in())]
     return ca.Function(f"within_range_{method.replace('-', '')}_{layout.key()}_m{m}", xm, [cond(*xm)],
                        {"never_inline": True})
+
+
+forget_on_unregister(within_range.cache_clear)

@@ -194,7 +194,7 @@ class Problem:
         return self.model.params
 
 
-def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
+def build_problem(sc, params: dict | None = None, *, error=None, commanded=(), command_rpm: bool = False) -> Problem:
     """The :class:`Problem` of a scenario: parameters resolved from the table, the scenario's settings and
     ``params`` (which win), the layout from its ships, obstacles and walls.
 
@@ -206,6 +206,12 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
         Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`).
     error : type, optional
         Error class for a bad override (default :class:`~mmg_casadi.errors.ParameterError`).
+    commanded : iterable of int, optional
+        Ships steered from outside (``Layout.commanded``;
+        their methods are not used): the environment of :mod:`mmg_casadi.gym` and
+        :func:`~mmg_casadi.closed_loop.simulation.simulate` with ``commands``.
+    command_rpm : bool, default False
+        The commanded ships also order their propeller speed.
 
     Returns
     -------
@@ -223,10 +229,13 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
     resolved = sc.settings.resolved(params, cls=error or ParameterError)
     methods_ = tuple(sc.method_of(i) for i in range(len(sc.ships)))
     replayed = tuple(i for i, s in enumerate(sc.ships) if getattr(s, "track", None) is not None)
-    methods_ = tuple("none" if i in replayed else m for i, m in enumerate(methods_))  # not steered
+    commanded = tuple(sorted({int(i) for i in commanded}))
+    if any(not 0 <= i < len(sc.ships) or i in replayed for i in commanded):
+        raise ScenarioError("commanded", f"indices of ships that are not replayed, in [0, {len(sc.ships)})",
+                            list(commanded))
+    methods_ = tuple("none" if i in replayed or i in commanded else m for i, m in enumerate(methods_))  # not steered
     for i, m in enumerate(methods_):
-        if m not in methods.METHODS:
-            raise ScenarioError(f"ships[{i}].method", f"one of: {', '.join(methods.NAMES)}", m)
+        methods.get(m, f"ships[{i}].method", ScenarioError)
     walls = []
     for w in sc.walls:
         pts = np.asarray(w.points, float)
@@ -236,11 +245,19 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
     check_size(len(sc.ships), len(sc.obstacles), len(walls), cls=ScenarioError)
     check_steps(resolved["t_max"], resolved["dt"], cls=error or ParameterError, ships=len(sc.ships))
     check_unrolled(len(sc.ships), resolved["fleet_from_ships"], cls=error or ParameterError)
+    if commanded and len(sc.ships) >= resolved["fleet_from_ships"]:
+        raise (error or ParameterError)("fleet_from_ships", f"more than the {len(sc.ships)} ships of a scenario "
+                                        "with commanded ships (the fleet step takes no commands)",
+                                        resolved["fleet_from_ships"])
     vessels = tuple(getattr(s, "vessel", None) or resolved["vessel"] for s in sc.ships)
     for i, v in enumerate(vessels):
         load_vessel(v, f"ships[{i}].vessel")
     fleet = (len(sc.ships) >= resolved["fleet_from_ships"]
              or len(sc.ships) * len(sc.obstacles) > MAX_UNROLLED_OBSTACLE_PAIRS)  # obstacles seen through slots
+    if commanded and fleet and len(sc.ships) < resolved["fleet_from_ships"]:
+        raise ScenarioError("obstacles", f"at most {MAX_UNROLLED_OBSTACLE_PAIRS // len(sc.ships)} obstacles with "
+                            f"{len(sc.ships)} ships in a scenario with commanded ships (more run the fleet step, "
+                            "which takes no commands)", len(sc.obstacles))
     layout = Layout(methods=methods_, n_obstacles=len(sc.obstacles), n_walls=len(walls),
                     max_path=max(1 + len(s.waypoints) for s in sc.ships),
                     vo_candidates=resolved["vo_candidates"], vo_cone=resolved["vo_cone"],
@@ -249,13 +266,21 @@ def build_problem(sc, params: dict | None = None, *, error=None) -> Problem:
                     vessels=() if set(vessels) == {DEFAULT_VESSEL} else vessels,
                     neighbours=resolved["neighbour_slots"] if fleet else 0,
                     n_land=len(land), **_replay_layout(sc, replayed, resolved, error or ParameterError, fleet),
-                    cv_extremis="colregs-vortex" in methods_ and resolved["cv_speed_extremis"] > 0)
+                    cv_extremis="colregs-vortex" in methods_ and resolved["cv_speed_extremis"] > 0,
+                    options=_options(methods_, resolved), commanded=commanded, command_rpm=bool(command_rpm))
     model = ClosedLoopModel(layout, resolved)
     ships = tuple(_ship_inputs(_engine_speed(s), load_vessel(v).ship, v, unit=vessels[0])
                   for s, v in zip(sc.ships, vessels))
     ships = tuple(_with_track(s, d) for s, d in zip(sc.ships, ships))
     obstacles = [(o.position[0], o.position[1], o.radius) for o in sc.obstacles]
     return Problem(model, model.initial_state(list(ships)), model.pack(list(ships), obstacles, walls), ships)
+
+
+def _options(methods_used, resolved: dict) -> tuple:
+    """The structural parameters of the registered methods the ships use, ``(name, value)`` in registry order
+    (``Layout.options``)."""
+    used = set(methods_used)
+    return tuple((k, resolved[k]) for n, m in methods.METHODS.items() if n in used for k in m.options)
 
 
 def _replay_layout(sc, replayed: tuple, resolved: dict, error, fleet: bool = False) -> dict:

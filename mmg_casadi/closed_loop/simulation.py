@@ -22,6 +22,7 @@ from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.errors import InputError
 from mmg_casadi.closed_loop.state import ship_rows
 from mmg_casadi.closed_loop.step import AUX, build_closed_loop_step, build_guidance
+from mmg_casadi.guidance.methods import forget_on_unregister
 
 
 def rollout_functions(layout: Layout) -> list[ca.Function]:
@@ -57,11 +58,29 @@ def _keep(layout: Layout, compiled) -> tuple[ca.Function, ...]:
     return _LIBRARIES[layout]
 
 
+def describe(layout: Layout) -> str:
+    """What a rollout of ``layout`` compiles, in words (the notice of :data:`mmg_casadi.compiled.NOTICES`).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout.
+
+    Returns
+    -------
+    str
+        For example ``"closed loop for 3 ships (modified-vortex)"``.
+    """
+    n = layout.n_ships
+    kind = "fleet step" if layout.neighbours else "closed loop"
+    return f"{kind} for {n} ship{'s' if n != 1 else ''} ({', '.join(dict.fromkeys(layout.methods))})"
+
+
 def _library(layout: Layout) -> tuple[ca.Function, ...]:
     if layout in _LIBRARIES:
         return _LIBRARIES[layout]
     step, *also = rollout_functions(layout)
-    compiled = compile_function(step, also=also)
+    compiled = compile_function(step, also=also, label=describe(layout))
     return _keep(layout, compiled if also else [compiled])
 
 
@@ -356,7 +375,7 @@ class Trajectory:
                     w.writerow([f"{tk:.4f}", cells[i], *(f"{v:.6g}" for v in vals)])
 
 
-def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200) -> Trajectory:
+def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200, commands=None) -> Trajectory:
     """Roll out one scenario until every ship has finished or ``t_max`` (in ``p``) is reached.
 
     Parameters
@@ -369,12 +388,22 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200)
         Parameter vector (:func:`~mmg_casadi.closed_loop.layout.pack_params`).
     chunk : int
         Steps per compiled ``mapaccum`` call.
+    commands : array_like, optional
+        Orders of the commanded ships (``Layout.commanded``),
+        one row per guidance step: ``(K, C)`` headings (rad) or, with ``Layout.command_rpm``, ``(K, C, 2)``
+        headings and propeller speeds (rev/min). Each step writes its row into the ships' ``command_heading`` /
+        ``command_rpm`` state rows and calls the same compiled step as without commands (which carries the rows
+        on: sample ``k + 1`` holds the orders of step ``k``), so the rollout equals stepping
+        :mod:`mmg_casadi.gym`'s environment with those actions to the bit; it ends after ``K`` steps (or earlier,
+        as without commands). Without ``commands`` a commanded ship holds the orders of ``x0``.
 
     Returns
     -------
     Trajectory
         The history, up to the sample at which the last ship finished or ``t_max`` was reached.
     """
+    if commands is not None:
+        return _simulate_commands(layout, x0, p, commands)
     fleet = layout.neighbours > 0
     if fleet:
         chunk = FLEET_CHUNK
@@ -408,6 +437,82 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200)
     X, A = X[:, :stop + 1], A[:stop]
     states = ship_rows(layout, X)
     return Trajectory(layout, X[0].copy(), states, A, overflow)
+
+
+def command_rows(layout: Layout) -> list[list[int]]:
+    """State rows of the commanded ships' orders: per commanded ship ``[command_heading]`` or, with
+    ``command_rpm``, ``[command_heading, command_rpm]``.
+
+    Parameters
+    ----------
+    layout : Layout
+        A layout with commanded ships.
+
+    Returns
+    -------
+    list of list of int
+        Row indices of the scenario state, one list per commanded ship.
+    """
+    names = ("command_heading", "command_rpm")[:1 + int(layout.command_rpm)]
+    return [[layout.row(k, i) for k in names] for i in layout.commanded]
+
+
+def stepper(layout: Layout, batch: int = 1):
+    """The compiled closed-loop step of ``layout`` (:func:`compiled_step`) as a function of numpy arrays, mapped over
+    ``batch`` scenario columns: ``(x (nx, batch), p (np, batch)) -> (x_next (nx, batch), aux (NAUX, N batch))``.
+
+    Parameters
+    ----------
+    layout : Layout
+        An unrolled layout.
+    batch : int, default 1
+        Columns stepped by one call (CasADi's ``map`` of the compiled step: each column runs the same compiled
+        code as a single step).
+
+    Returns
+    -------
+    callable
+        The step, bound to numpy buffers (no conversion to ``DM`` per call).
+    """
+    _check_unrolled(layout, "stepper")
+    return _stepper(layout, int(batch))
+
+
+@lru_cache(maxsize=32)
+def _stepper(layout: Layout, batch: int) -> _Bound:
+    f = compiled_step(layout)
+    return _Bound(f if batch == 1 else f.map(batch))
+
+
+def _simulate_commands(layout: Layout, x0, p, commands) -> Trajectory:
+    """:func:`simulate` with per-step orders of the commanded ships, one compiled step per order."""
+    rows = command_rows(layout)
+    if not rows:
+        raise InputError("commands", "nothing for a layout without commanded ships (Layout.commanded)",
+                         np.shape(commands))
+    cmd = np.asarray(commands, float)
+    want = (len(rows),) if not layout.command_rpm else (len(rows), 2)
+    if cmd.ndim == 1 and want == (1,):  # one ship's headings
+        cmd = cmd[:, None]
+    if cmd.ndim != 1 + len(want) or cmd.shape[1:] != want or not np.all(np.isfinite(cmd)):
+        raise InputError("commands", f"finite orders of shape (steps, {', '.join(map(str, want))})", cmd.shape)
+    step = stepper(layout)
+    t_max = float(p[layout.param_index("t_max")])
+    x = np.asarray(x0, float).copy()
+    p = np.asarray(p, float)
+    xs, auxs = [x.copy()], []
+    for k in range(cmd.shape[0]):
+        if _finished(layout, x, t_max)[0]:
+            break
+        for j, r in enumerate(rows):
+            x[r] = cmd[k, j]
+        x, aux = step(x, p)
+        x = x.ravel()
+        xs.append(x.copy())
+        auxs.append(aux.reshape(len(AUX), layout.n_ships).T)
+    X = np.column_stack(xs)
+    A = np.stack(auxs) if auxs else np.zeros((0, layout.n_ships, len(AUX)))
+    return Trajectory(layout, X[0].copy(), ship_rows(layout, X), A, 0)
 
 
 DEFAULT_WIDTH = 32
@@ -585,3 +690,7 @@ def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chu
         t.append(Hj[:, 0])
         states.append(Hj[:, 1:].reshape(len(Hj), N, len(HISTORY_STATE)))
     return out, busy, BatchHistory(t, states)
+
+
+forget_on_unregister(_LIBRARIES.clear, _chunk.cache_clear, _scenario_chunk.cache_clear, _bound.cache_clear,
+                     _stepper.cache_clear)

@@ -61,6 +61,8 @@ def initial_state(layout: Layout, ships: list[dict]) -> np.ndarray:
         row[col("x_best")], row[col("y_best")] = s["start"]
         for name in layout.memory:  # every memory row starts at the heading
             row[col(name)] = float(s["heading"])
+        if "command_rpm" in layout.memory:  # a commanded ship's propeller order starts at her engine's speed
+            row[col("command_rpm")] = row[col("n_prop")]
         x[layout.ship_block(i)] = row
     return x
 

@@ -32,14 +32,14 @@ import functools
 
 import casadi as ca
 
-from mmg_casadi.closed_loop.layout import Layout
+from mmg_casadi.closed_loop.layout import COMMAND_ROWS, Layout
 from mmg_casadi.closed_loop.neighbours import dispatch_args, within_range
 from mmg_casadi.closed_loop.replay import replay_update
 from mmg_casadi.errors import ParameterError
 from mmg_casadi.guidance import hazards, methods
 from mmg_casadi.guidance.heading_control import pd_heading
 from mmg_casadi.guidance.ilos import ilos_step_terms, limit_turn, switch_waypoint
-from mmg_casadi.guidance.methods import GuidanceInputs, command_from_vector
+from mmg_casadi.guidance.methods import GuidanceInputs, command_from_vector, forget_on_unregister
 from mmg_casadi.vessel import environment
 from mmg_casadi.vessel.actuators import engine_step
 from mmg_casadi.vessel.library import load_vessel, pair_collision_distance
@@ -248,7 +248,11 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         lim = ca.if_else(ca.norm_2(goal - pos[i]) > P["r_safe"], P[spec.turn_limit], ca.pi)
         psi_ilos = limit_turn(psi[i], psi_ilos, lim)
     cmd = None  # the method's command, and whether a neighbour is within R_safe
-    if spec.builder is None or (M == 0 and W == 0):
+    commanded = i in layout.commanded and nb is None
+    if commanded:  # steered from outside: the heading ordered in the state (Layout.commanded)
+        psi_d = Xi[S_["command_heading"]]
+        w_react = ca.SX(1)
+    elif spec.builder is None or (M == 0 and W == 0):
         psi_d = psi_ilos
         w_react = ca.SX(0)
     else:
@@ -291,6 +295,8 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     r_own = _own_time(layout, vessel or layout.vessel(i), Xi[S_["r"]])
     delta_c = pd_heading(psi[i], psi_d, r_own, P["kp"], P["kd"], P["delta_max"])
     n_c = n_service  # the leg's propeller speed, unless the method in charge commands another
+    if commanded and layout.command_rpm:
+        n_c = ca.fmin(ca.fmax(Xi[S_["command_rpm"]], Pi["rpm_min"]), Pi["rpm_max"])
     if cmd is not None and spec.commands_speed:
         rpm = ca.fmin(ca.fmax(cmd[0].rpm, Pi["rpm_min"]), Pi["rpm_max"])  # dead slow ahead .. maximum rpm
         n_c = ca.if_else(w_react, rpm, n_c) if sm is None else w_react * rpm + (1 - w_react) * n_c
@@ -323,6 +329,9 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     psi_next = xm_next[S_["psi"]]
     memory = []
     for k in layout.memory:  # the method's memory while a neighbour is within R_safe, else the heading
+        if k in COMMAND_ROWS:  # the orders of a commanded ship: written by the caller, carried unchanged
+            memory.append(Xi[S_[k]])
+            continue
         held = cmd[0].memory.get(k) if cmd is not None and cmd[1] is not None else None
         memory.append(psi_next if held is None else ca.if_else(cmd[1], held, psi_next))
     new = ca.vertcat(
@@ -519,3 +528,6 @@ def build_guidance(layout: Layout, *, sparse: bool = False) -> ca.Function:
     p = ca.SX.sym("p", layout.np)
     _, aux = step(x, p)
     return ca.Function(f"guidance_{layout.key()}", [x, p], [aux[0, :]], ["x", "p"], ["delta_c"], {"cse": True})
+
+
+forget_on_unregister(_sparse_functions.cache_clear)

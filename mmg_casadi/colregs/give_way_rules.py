@@ -2,14 +2,15 @@
 
 Her manoeuvre is measured from her baseline (:mod:`mmg_casadi.colregs.context`) to the CPA: the time of action is
 the first detectable change (``course_detectable_deg`` or ``speed_detectable``). Terms
-(:mod:`mmg_casadi.colregs.penalties`): S_r of the actual CPA, P_delay from the range where ample time ended,
-P_na of the largest course change and speed reduction.
+(:mod:`mmg_casadi.colregs.penalties`): S_safety of the actual CPA (its range and the pose), P_delay from the range
+where ample time ended, P_na of the largest course change and speed reduction.
 
 * **Rules 8 and 16** (8: ample time, readily apparent, safe distance; 16: early and substantial action to keep well
-  clear): S = S_r·(1 − P_delay)·(1 − P_na) (AIS_processing's S16). Verdict: she acted, in ample time (before the
-  ample time ended, or it never ended), with a readily apparent change (``course_apparent_deg`` or a reduction of
-  ``speed_apparent``) and passed at ``d_safe`` or more. Rule 16 applies to give-way and overtaking ships; for
-  them the two rules coincide. A head-on ship has Rule 8 only.
+  clear): S = S_safety·(1 − P_delay)·(1 − P_na) (AIS_processing's S16). Verdict: she acted, in ample time (before
+  the ample time ended, or it never ended), with a readily apparent change (``course_apparent_deg`` or a reduction
+  of ``speed_apparent``) and passed at ``d_safe`` or more; a give-way (crossing) or overtaking ship's own action
+  must also give that clearance (``own_clearance``, :func:`mmg_casadi.colregs.context.own_clearance`). Rule 16
+  applies to give-way and overtaking ships; for them the two rules coincide. A head-on ship has Rule 8 only.
 * **Rule 14** (head-on): S = max(0, 1 − w_sts·P_sts − w_nsm·P_nsm), P_sts = 1 − port-to-port score at the CPA,
   P_nsm = 1 − min(1, starboard alteration/``starboard_min_deg``) (linear; Hagen 2023 names the term, its form
   here is ours). Verdict: a starboard alteration of at least ``starboard_min_deg``, none to port of that size,
@@ -20,6 +21,9 @@ P_na of the largest course change and speed reduction.
   and clear (the end of the pair's stretch: the next encounter or the end), she crossed the overtaken ship's
   course line less than ``d_ahead`` ahead of her, or (``ahead_contact_deg``) lay within that angle of her bow at
   the CPA. Verdict: no crossing ahead and a range of at least ``d_safe`` throughout.
+
+A rule not kept names ``t_broken``, the first sample at which it broke (for Rules 8, 16: the end of ample time if
+she had not acted by then, the first range below ``d_safe``, else the CPA).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import numpy as np
 
 from mmg_casadi.colregs.manoeuvre import course_line_crossings, measure_manoeuvre
 from mmg_casadi.colregs.penalties import (delay_penalty, non_apparent_penalty, passing_distance_score,
-                                          port_to_port_score, ramp)
+                                          port_to_port_score, ramp, safety_score)
 from mmg_casadi.colregs.verdict import RuleResult
 
 
@@ -73,30 +77,47 @@ def give_way_rules(ctx) -> dict:
     p_delay = delay_penalty(r_late, r_man, ctx.cpa)
     p_na = non_apparent_penalty(m.max_course_change_deg, m.max_speed_decrease, p)
     apparent = m.max_course_change_deg >= p.course_apparent_deg or m.max_speed_decrease >= p.speed_apparent
+    k_cpa = e.cpa
     s_r = float(passing_distance_score(ctx.cpa, p))
-    safe = ctx.cpa >= p.d_safe
-    s16 = s_r * (1.0 - p_delay) * (1.0 - p_na)
+    s_safety = float(safety_score(ctx.cpa, ctx.alpha[k_cpa], ctx.beta[k_cpa], p))
+    own = ctx.clearance is None or ctx.clearance >= p.d_safe
+    safe = ctx.cpa >= p.d_safe and own
+    s16 = s_safety * (1.0 - p_delay) * (1.0 - p_na)
     terms = {"t_action": ctx.at(m.action), "range_at_action": None if not acted else float(ctx.range[m.action]),
              "t_late": ctx.at(ctx.late), "range_late": r_late, "in_ample_time": ample,
              "course_change_deg": m.max_course_change_deg, "speed_reduction": m.max_speed_decrease,
-             "readily_apparent": apparent, "cpa": ctx.cpa, "safe_distance": safe,
-             "S_r": s_r, "P_delay": p_delay, "P_na": p_na}
+             "readily_apparent": apparent, "cpa": ctx.cpa, "own_clearance": ctx.clearance, "safe_distance": safe,
+             "S_r": s_r, "S_safety": s_safety, "P_delay": p_delay, "P_na": p_na}
     kept = acted and ample and apparent and safe
+    causes = ((ctx.late, not ample), (_first_below(ctx, window, p.d_safe), not safe), (k_cpa, True))
+    broken = [] if kept else [k for k, bad in causes if bad and k is not None]
+    terms["t_broken"] = ctx.at(min(broken)) if broken else None
     out = {"8": RuleResult(kept, s16, terms)}
     if ctx.role in ("give-way", "overtaking"):
         out["16"] = RuleResult(kept, s16, terms)
     if ctx.role == "head-on":
         out["14"] = _rule_14(ctx, m)
     if ctx.role == "give-way":
-        ahead = course_line_crossings(ctx.pos, ctx.pos_other, ctx.psi_other, np.arange(e.onset, e.release + 1))
+        ahead, at = course_line_crossings(ctx.pos, ctx.pos_other, ctx.psi_other, np.arange(e.onset, e.release + 1),
+                                          with_samples=True)
+        at = at[ahead >= 0.0]
         ahead = ahead[ahead >= 0.0]
         p_ahead = 1.0 if ahead.size else 0.0
-        out["15"] = RuleResult(not ahead.size and safe, max(0.0, s16 - p.w_ahead_15 * p_ahead),
+        kept_15 = not ahead.size and safe
+        broken = [k for k in (at[0] if at.size else None, None if safe else _first_below(ctx, window, p.d_safe))
+                  if k is not None] or [k_cpa]
+        out["15"] = RuleResult(kept_15, max(0.0, s16 - p.w_ahead_15 * p_ahead),
                                {"S16": s16, "P_ahead": p_ahead, "crossed_ahead_at": ahead.tolist(), "cpa": ctx.cpa,
-                                "safe_distance": safe})
+                                "safe_distance": safe, "t_broken": None if kept_15 else ctx.at(int(min(broken)))})
     if ctx.role == "overtaking":
         out["13"] = _rule_13(ctx, s16)
     return out
+
+
+def _first_below(ctx, window, distance) -> int | None:
+    """First sample of ``window`` at which the range is below ``distance``, or None."""
+    below = np.flatnonzero(ctx.range[window] < distance)
+    return int(window[below[0]]) if below.size else None
 
 
 def _rule_14(ctx, m) -> RuleResult:
@@ -109,20 +130,25 @@ def _rule_14(ctx, m) -> RuleResult:
     return RuleResult(kept, max(0.0, 1.0 - p.w_sts * p_sts - p.w_nsm * p_nsm),
                       {"starboard_deg": m.starboard_deg, "port_deg": m.port_deg,
                        "alpha_cpa_deg": float(np.degrees(alpha)), "beta_cpa_deg": float(np.degrees(beta)),
-                       "P_sts": p_sts, "P_nsm": p_nsm})
+                       "P_sts": p_sts, "P_nsm": p_nsm, "in_doubt": ctx.doubt,
+                       "t_broken": None if kept else ctx.at(k)})
 
 
 def _rule_13(ctx, s16) -> RuleResult:
     """Rule 13 of an overtaking ship whose Rule 16 score is ``s16`` (module docstring)."""
     p, e = ctx.profile, ctx.episode
     span = np.arange(e.onset, ctx.end + 1)
-    crossings = course_line_crossings(ctx.pos, ctx.pos_other, ctx.psi_other, span)
-    ahead = np.zeros(0) if p.d_ahead is None else crossings[(crossings >= 0.0) & (crossings < p.d_ahead)]
+    crossings, at = course_line_crossings(ctx.pos, ctx.pos_other, ctx.psi_other, span, with_samples=True)
+    near = np.zeros(crossings.size, dtype=bool) if p.d_ahead is None else (crossings >= 0.0) & (crossings < p.d_ahead)
+    ahead, at = crossings[near], at[near]
     alpha = float(np.degrees(ctx.alpha[e.cpa]))
     bow = p.ahead_contact_deg is not None and abs(alpha) < p.ahead_contact_deg
     p_ahead = 1.0 if ahead.size or bow else 0.0
     closest = float(np.min(ctx.range[span]))
     kept = closest >= p.d_safe and not p_ahead
+    broken = [k for k in (at[0] if at.size else None, e.cpa if bow else None, _first_below(ctx, span, p.d_safe))
+              if k is not None]
     return RuleResult(kept, max(0.0, s16 - p.w_ahead_13 * p_ahead),
                       {"S16": s16, "P_ahead": p_ahead, "crossed_ahead_at": ahead.tolist(), "alpha_cpa_deg": alpha,
-                       "closest_until_clear": closest, "t_clear": ctx.at(ctx.end)})
+                       "closest_until_clear": closest, "t_clear": ctx.at(ctx.end),
+                       "t_broken": ctx.at(int(min(broken))) if not kept and broken else None})

@@ -12,6 +12,7 @@ she crossed the other ship's course line (numpy, vectorised over the samples of 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,27 +49,27 @@ class Manoeuvre:
     speed_increase: np.ndarray
     action: int | None
 
-    @property
+    @functools.cached_property
     def starboard_deg(self) -> float:
         """Largest alteration to starboard (degrees, ≥ 0)."""
         return float(max(0.0, np.max(self.course_change, initial=0.0)))
 
-    @property
+    @functools.cached_property
     def port_deg(self) -> float:
         """Largest alteration to port (degrees, ≥ 0)."""
         return float(max(0.0, -np.min(self.course_change, initial=0.0)))
 
-    @property
+    @functools.cached_property
     def max_course_change_deg(self) -> float:
         """Largest alteration either way (degrees)."""
         return max(self.starboard_deg, self.port_deg)
 
-    @property
+    @functools.cached_property
     def max_speed_decrease(self) -> float:
         """Largest relative speed reduction."""
         return float(np.max(self.speed_decrease, initial=0.0))
 
-    @property
+    @functools.cached_property
     def max_speed_increase(self) -> float:
         """Largest relative speed increase."""
         return float(np.max(self.speed_increase, initial=0.0))
@@ -121,7 +122,7 @@ def measure_manoeuvre(psi, speed, window, reference, speed_ref, speed_max, *, co
     return Manoeuvre(window, course, decrease, increase, int(window[first[0]]) if first.size else None)
 
 
-def course_line_crossings(pos_own, pos_other, psi_other, window) -> np.ndarray:
+def course_line_crossings(pos_own, pos_other, psi_other, window, *, with_samples: bool = False):
     """Where the own ship crossed the other ship's course line within ``window``: the distances ahead (L).
 
     The course line runs through the other ship along her heading. A crossing is the own ship's change of side
@@ -138,12 +139,14 @@ def course_line_crossings(pos_own, pos_other, psi_other, window) -> np.ndarray:
         Heading of the other ship (rad).
     window : array-like of int
         Consecutive samples to search.
+    with_samples : bool, default False
+        Also return the sample at which each crossing was seen (the later sample of its pair).
 
     Returns
     -------
-    numpy.ndarray
+    numpy.ndarray or tuple of numpy.ndarray
         Distance along the other ship's course line of each crossing (L, positive ahead of her), in time order;
-        empty without a crossing.
+        empty without a crossing. With ``with_samples``, ``(distances, samples)``.
 
     Examples
     --------
@@ -162,7 +165,7 @@ def course_line_crossings(pos_own, pos_other, psi_other, window) -> np.ndarray:
     """
     window = np.asarray(window, dtype=int)
     if window.size < 2:
-        return np.zeros(0)
+        return (np.zeros(0), np.zeros(0, dtype=int)) if with_samples else np.zeros(0)
     rel = np.asarray(pos_own, dtype=float)[window] - np.asarray(pos_other, dtype=float)[window]
     psi = np.asarray(psi_other, dtype=float)[window]
     h = np.column_stack([np.cos(psi), np.sin(psi)])
@@ -178,4 +181,5 @@ def course_line_crossings(pos_own, pos_other, psi_other, window) -> np.ndarray:
     cross = (side != 0.0) & (prev >= 0) & (np.sign(side_then) * np.sign(side[j0]) < 0.0)
     j, i = prev[cross], k[cross]
     f = side[j] / (side[j] - side_then[i])
-    return along[j] + f * (along_then[i] - along[j])
+    distances = along[j] + f * (along_then[i] - along[j])
+    return (distances, window[i]) if with_samples else distances

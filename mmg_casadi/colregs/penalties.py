@@ -16,7 +16,12 @@ sign convention: angles positive to starboard.
 * :func:`port_to_port_score` ((1 − sin α)/2)²·((1 − sin β)/2)² (AIS_processing's form, positive to port there):
   1 when each ship passes the other abeam on her port side;
 * :func:`stand_on_penalty`: the course change ramped from detectable to readily apparent (Hagen 2023, after
-  Woerner et al.), the speed increase and decrease ramped between the speed thresholds the same way (ours).
+  Woerner et al.), the speed increase and decrease ramped between the speed thresholds the same way (ours);
+* :func:`pose_score` ``S_θ = γ_α·(1 − cos min(|α|, cut)) + γ_β·(1 − cos min(|β|, cut))`` at the CPA (AIS_processing's
+  terms, Hagen 2023's weights γ_α = 0.25, γ_β = 0.75, cut-off 90°): 1 when each ship passes abeam of or abaft the
+  other's beam, 0 when both bows point at each other;
+* :func:`safety_score` S_safety = S_r + (1 − S_r)·S_θ (the form of github.com/marinehdk/colav-simulator's
+  reading of Hagen 2023), 0 at a CPA within ``r_col`` (ours: a collision is never safe, whatever the pose).
 """
 
 from __future__ import annotations
@@ -44,6 +49,10 @@ def ramp(x, lo, hi):
     >>> ramp(np.array([1.0, 2.0, 3.0, 5.0]), 2.0, 4.0).tolist(), float(ramp(2.0, 2.0, 2.0))
     ([0.0, 0.0, 0.5, 1.0], 1.0)
     """
+    if isinstance(x, float):  # a plain number: the same arithmetic without numpy's overhead
+        if hi <= lo:
+            return np.float64(1.0 if x >= hi else 0.0)
+        return np.float64(min(max((x - lo) / (hi - lo), 0.0), 1.0))
     x = np.asarray(x, dtype=float)
     if hi <= lo:
         return (x >= hi).astype(float)
@@ -203,3 +212,62 @@ def stand_on_penalty(course_change_deg, speed_increase, speed_decrease, profile)
     total = p.w_so_course * out["P_course"] + p.w_so_up * out["P_up"] + p.w_so_down * out["P_down"]
     out["score"] = max(0.0, 1.0 - total)
     return out
+
+
+def pose_score(alpha, beta, profile):
+    """Pose score S_θ at the CPA from the contact angle α and the bearing β (module docstring), elementwise.
+
+    Parameters
+    ----------
+    alpha, beta : float or array-like
+        Contact angle and bearing at the CPA (rad).
+    profile : ScoringProfile
+        ``w_pose_alpha``, ``w_pose_beta`` and ``pose_cut_deg``.
+
+    Returns
+    -------
+    numpy.ndarray
+        S_θ in [0, 1] (0 for weights 0).
+
+    Examples
+    --------
+    >>> from mmg_casadi.colregs.profiles import published
+    >>> d = np.radians
+    >>> np.round(pose_score(d([0.0, -90.0, 0.0]), d([0.0, -90.0, -90.0]), published()), 3).tolist()
+    [0.0, 1.0, 0.75]
+    """
+    cut = np.radians(profile.pose_cut_deg)
+    a = 1.0 - np.cos(np.minimum(np.abs(np.asarray(alpha, dtype=float)), cut))
+    b = 1.0 - np.cos(np.minimum(np.abs(np.asarray(beta, dtype=float)), cut))
+    return profile.w_pose_alpha * a + profile.w_pose_beta * b
+
+
+def safety_score(cpa, alpha, beta, profile):
+    """Safety score S_safety of a passing: range score S_r and pose score S_θ (module docstring), elementwise.
+
+    Parameters
+    ----------
+    cpa : float or array-like
+        Actual CPA (L).
+    alpha, beta : float or array-like
+        Contact angle and bearing at the CPA (rad).
+    profile : ScoringProfile
+        The passing-distance and pose thresholds and weights.
+
+    Returns
+    -------
+    numpy.ndarray
+        S_safety in [0, 1]; S_r alone when the pose weights are 0.
+
+    Examples
+    --------
+    Passing abeam 6 L apart is safer than passing 6 L apart bow to bow, and no collision is safe:
+
+    >>> from mmg_casadi.colregs.profiles import published
+    >>> d = np.radians
+    >>> np.round(safety_score([6.0, 6.0, 1.5], d([90.0, 0.0, 90.0]), d([-90.0, 0.0, -90.0]), published()), 3).tolist()
+    [1.0, 0.648, 0.0]
+    """
+    s_r = passing_distance_score(cpa, profile)
+    s = s_r + (1.0 - s_r) * pose_score(alpha, beta, profile)
+    return np.where(np.asarray(cpa, dtype=float) <= profile.r_col, 0.0, s)

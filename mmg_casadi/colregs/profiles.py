@@ -21,7 +21,17 @@ Sources cited by the profiles (read as stated; "ours" marks a value this package
   doi:10.1007/s10514-018-9765-y. Cited below as *Hagen 2023 (evaluator.yaml)* and *AIS_processing*.
 * A. N. Cockcroft & J. N. F. Lameijer, *A Guide to the Collision Avoidance Rules*: an alteration of course under
   10° is unlikely to be readily apparent (p. 51); close quarters begins at about 1 nautical mile for ships in
-  sight of one another (p. 52).
+  sight of one another (p. 52); Rule 8(d)'s safe passing distance binds the give-way ship, not the stand-on ship's
+  action under Rule 17(a)(ii) or 17(b) (p. 72); in open sea a give-way ship that has not acted by about 2 nautical
+  miles in a crossing of two merchant ships has usually waited too long (p. 108).
+* The re-implementation of Hagen 2023 at github.com/marinehdk/colav-simulator
+  (``config/evaluator/oe2023_simulated-v1.yaml``, ``colav_simulator/evaluation/scoring.py``), cited as *MH*: the
+  stand-on ship must act (Rule 17(b)) within 60 s of the CPA; passing-distance score r_pref = 2 r_min; safety score
+  S_r + (1 − S_r)·S_θ.
+* M. Krasowski & M. Althoff, "Temporal Logic Formalization of Marine Traffic Rules", IEEE IV 2021, and their
+  rule monitor (CommonOcean), as re-implemented (their numbers read from arXiv 2402.08502 by a third party): a risk
+  of collision is judged over a time horizon of 420 s, and a ship is given 60 s to react.
+* MOOS-IvP ``uFldCollisionDetect`` (after K. Woerner): a near miss at twice the collision distance (6 m and 3 m).
 
 The form of the graded scores (which term multiplies or subtracts which) follows AIS_processing and Hagen 2023;
 :mod:`mmg_casadi.colregs.penalties` gives each formula.
@@ -34,6 +44,9 @@ Examples
 >>> ntnu = scoring_profile("ntnu-2023")
 >>> ntnu.head_on_deg, ntnu.overtaking_bow_deg, round(ntnu.late_range, 1), round(ntnu.must_range, 1)
 (13.0, 45.0, 22.0, 4.0)
+>>> pub = scoring_profile("published")
+>>> round(pub.d_safe, 2), round(pub.late_range, 1), pub.course_apparent_deg, pub.course_tolerance_deg
+(8.05, 16.1, 30.0, 2.0)
 """
 
 from __future__ import annotations
@@ -102,6 +115,41 @@ class ScoringProfile:
         Weights of the crossing-ahead penalties of Rules 15 and 13.
     w_so_course, w_so_up, w_so_down : float
         Rule 17(a)(i) weights of the course change, speed increase and speed decrease penalties.
+    head_on_doubt_deg : float or None
+        Rule 14(c), "in any doubt ... assume that it does exist": two ships that see each other within this angle
+        of the bow meet head-on although ``head_on_deg`` alone would make it a crossing (degrees; None: no doubt
+        band).
+    late_after_onset : float
+        The give-way ship's ample time ends no earlier than this long after the onset of risk (L/U): a ship is
+        given time to react to a risk that arises inside the ``late_*`` range (0: the trigger alone).
+    must_cpa : float or None
+        Rule 17(b) needs the straight-line CPA below this (L) at ``must``: collision cannot then be avoided by the
+        give-way ship alone (None: ``d_safe``).
+    excuse : {"forced", "open-duty"}
+        When a stand-on ship's change of course or speed is excused by a give-way duty to another ship
+        (:mod:`mmg_casadi.colregs.duties`): ``"forced"`` only while that duty is active (risk, not past its CPA)
+        and the change is in the direction the duty requires; ``"open-duty"`` (scorer version 4) while that duty
+        is open at all.
+    inaction : {"no-action", "late"}
+        When the give-way ship's inaction becomes apparent to the stand-on ship (Rule 17(a)(ii)): ``"no-action"``
+        at ``late`` or after, once she has still made no readily apparent change; ``"late"`` (version 4) at
+        ``late`` whatever she did.
+    side_17c : {"onset", "now"}
+        Rule 17(c)'s "a vessel on her own port side": at the onset of risk (``"onset"``, so a port turn that
+        swings the other ship onto the starboard side still counts) or at each sample (``"now"``, version 4).
+    own_clearance : bool
+        Rules 8, 16 (crossing, overtaking): the give-way ship's own action must produce the safe passing distance,
+        i.e. her track must clear ``d_safe`` from the other ship's track had that ship held course and speed
+        (version 4: the actual CPA only).
+    w_pose_alpha, w_pose_beta : float
+        Weights of the pose score S_θ at the CPA from the contact angle α and the bearing β (sum at most 1;
+        0 and 0: the safety score is S_r alone, version 4).
+    pose_cut_deg : float
+        Pose cut-off: from this angle off the bow a ship's pose at the CPA is fully safe (degrees).
+    past_clear : float or None
+        Rule 13(d): an overtaking lasts until the overtaking ship is finally past and clear, the range opening
+        beyond this (L); a later risk of the pair before then belongs to the same encounter, with its roles
+        (None: the encounter ends at its release).
 
     Examples
     --------
@@ -150,6 +198,17 @@ class ScoringProfile:
     w_so_course: float
     w_so_up: float
     w_so_down: float
+    head_on_doubt_deg: float | None = None
+    late_after_onset: float = 0.0
+    must_cpa: float | None = None
+    excuse: str = "forced"
+    inaction: str = "no-action"
+    side_17c: str = "onset"
+    own_clearance: bool = True
+    w_pose_alpha: float = 0.25
+    w_pose_beta: float = 0.75
+    pose_cut_deg: float = 90.0
+    past_clear: float | None = None
 
     def __post_init__(self):
         for key in ("d_risk", "t_risk", "r_risk", "d_ahead", "late_tcpa", "late_range", "must_tcpa", "must_range"):
@@ -174,6 +233,32 @@ class ScoringProfile:
         if not math.isclose(self.gamma_col + self.gamma_nm + self.gamma_min, 1.0):
             raise InputError("gamma_col + gamma_nm + gamma_min", "1", self.gamma_col + self.gamma_nm + self.gamma_min)
         check_range("d_safe", self.d_safe, 0.0, self.d_risk, low_open=True, unit="L (at most d_risk)")
+        if self.head_on_doubt_deg is not None:
+            check_range("head_on_doubt_deg", self.head_on_doubt_deg, self.head_on_deg, 90.0,
+                        unit="degrees (at least head_on_deg)")
+        check_range("late_after_onset", self.late_after_onset, 0.0, None)
+        if self.must_cpa is not None:
+            check_range("must_cpa", self.must_cpa, 0.0, None, low_open=True)
+        for key, allowed in POLICIES.items():
+            if getattr(self, key) not in allowed:
+                raise InputError(key, f"one of: {', '.join(allowed)}", getattr(self, key))
+        if not isinstance(self.own_clearance, bool):
+            raise InputError("own_clearance", "true or false", self.own_clearance)
+        for key in ("w_pose_alpha", "w_pose_beta"):
+            check_range(key, getattr(self, key), 0.0, 1.0)
+        check_range("w_pose_alpha + w_pose_beta", self.w_pose_alpha + self.w_pose_beta, 0.0, 1.0 + 1e-12)
+        check_range("pose_cut_deg", self.pose_cut_deg, 0.0, 180.0, low_open=True, unit="degrees")
+        if self.past_clear is not None:
+            check_range("past_clear", self.past_clear, 0.0, None, low_open=True)
+
+    @property
+    def must_distance(self) -> float:
+        """The straight-line CPA below which the stand-on ship must act (L): ``must_cpa``, else ``d_safe``."""
+        return self.d_safe if self.must_cpa is None else self.must_cpa
+
+
+#: the allowed values of the scorer's policies (the first is version 5's and the published profile's)
+POLICIES = {"excuse": ("forced", "open-duty"), "inaction": ("no-action", "late"), "side_17c": ("onset", "now")}
 
 
 #: weights of the graded scores that Hagen 2023 (evaluator.yaml) and AIS_processing publish, shared by both profiles
@@ -183,7 +268,17 @@ _WEIGHTS = {
     "w_sts": 0.6, "w_nsm": 0.4,              # γ_sts, γ_nsm, Hagen 2023 (evaluator.yaml)
     "w_ahead_15": 0.5, "w_ahead_13": 0.3,    # S15 = S16 − 0.5 P_ahead, S13 = S16 − 0.3 P_ahead, both sources
     "w_so_course": 0.5, "w_so_up": 0.25, "w_so_down": 0.25,  # γ_so,Δχ, γ_so,up, γ_so,down, Hagen 2023
+    "w_pose_alpha": 0.25, "w_pose_beta": 0.75,  # γ_α, γ_β of the pose score, Hagen 2023 (evaluator.yaml)
 }
+
+NAUTICAL_MILE = 1852.0
+"""Metres per nautical mile."""
+
+KCS_LENGTH = 230.0
+"""Length between perpendiculars of the KCS (m), the unit ship length of the paper's scenes."""
+
+KCS_TIME_UNIT = 230.0 / 12.347
+"""The KCS's time unit L/U (s): its length over its design speed of 24 kn (12.347 m/s)."""
 
 
 def iitm_lab() -> ScoringProfile:
@@ -289,17 +384,86 @@ def ntnu_2023(metres_per_length: float = 50.0) -> ScoringProfile:
         gamma_min=0.2, d_safe=100.0 / m, d_ahead=None, ahead_contact_deg=45.0, **_WEIGHTS)
 
 
-#: names accepted by :func:`scoring_profile`
-SCORING_PROFILES = {"iitm-lab": iitm_lab, "ntnu-2023": ntnu_2023}
+def published(metres_per_length: float = KCS_LENGTH, seconds_per_unit: float = KCS_TIME_UNIT) -> ScoringProfile:
+    """The published standard: the thresholds of Woerner et al. (2019) and Hagen et al. (2023) for angles, speeds,
+    sectors and the graded scores, seamanship (Cockcroft & Lameijer) for distances and timing, converted to the
+    scene's units with the own ship's length and time unit (the KCS's by default).
+
+    * changes (Hagen 2023 evaluator.yaml, after Woerner et al.): detectable 2° and 20 %, readily apparent 30° and a
+      50 % speed cut; a starboard manoeuvre from 10°; the stand-on ship keeps her course and speed while no
+      detectable change is made (2°, 20 %; penalised from 2° to 30°);
+    * sectors: head-on within 13° of each bow (Hagen 2023 ``theta_critical_ho``); Rule 14(c), in doubt assume
+      head-on: each ship within 22.5° of the other's bow (ours: the widest head-on sector of the schemes compared,
+      the paper laboratory's ±22.5°, inside AIS_processing's active 30°); overtaking from
+      112.5° (COLREG Rule 13(b)) with the overtaken ship within 45° of the overtaker's bow (Hagen 2023);
+    * risk of collision (Rule 7): a straight-line CPA below the safe passing distance within a time horizon of
+      420 s (Krasowski & Althoff's rule monitor), no range horizon;
+    * safe passing distance 1 nautical mile (8.05 L for the KCS): where close quarters begins for ships in sight
+      (Cockcroft & Lameijer p. 52), which Rule 8(c) asks the give-way ship's action to avoid; it binds the give-way
+      ship's own action (her track must clear it from the stand-on ship's track had she held on, p. 72);
+    * timing: the give-way ship's ample time ends at 2 nautical miles (16.1 L; Cockcroft & Lameijer p. 108), but
+      never less than 60 s after the risk arose (a ship's time to react, Krasowski & Althoff); her inaction is
+      apparent once that has passed with no readily apparent change of hers (Rule 17(a)(ii)); the stand-on ship
+      must act within 60 s of the CPA with the straight-line CPA below a near miss (MH's Rule 17(b) trigger);
+    * passing-distance score: 0 at the collision distance 2 L (paper §Statistical Analysis), γ_col = 0.5 gained
+      to a near miss at twice that, 4 L (MOOS-IvP's ratio), γ_nm = 0.3 to the safe distance of 1 nm and
+      γ_min = 0.2 to twice it, 2 nm (MH's r_pref = 2 r_min; γ of Hagen 2023); pose score and weights Hagen 2023;
+    * Rule 13: the overtaker within 45° of the overtaken ship's bow at the CPA crosses ahead (Hagen 2023), and so
+      does one that crosses her course line less than 1 nautical mile ahead of her (close quarters, Cockcroft &
+      Lameijer p. 52); the overtaking lasts until she is past and clear, 2 nautical miles off (Rule 13(d); ours:
+      where the passing-distance score is full);
+    * ``t_lookback`` 4 L/U, as the laboratory profile (ours).
+
+    Parameters
+    ----------
+    metres_per_length : float, default 230.0
+        The own ship's length (m): converts nautical miles to the scene's ship lengths.
+    seconds_per_unit : float, default 230 / 12.347
+        The scene's time unit L/U (s): converts seconds.
+
+    Returns
+    -------
+    ScoringProfile
+        The profile ``"published"`` (lengths in L, times in L/U, angles in degrees).
+
+    Examples
+    --------
+    >>> p = published()
+    >>> round(p.d_risk, 2), round(p.t_risk, 1), round(p.late_after_onset, 2), round(p.must_tcpa, 2)
+    (8.05, 22.5, 3.22, 3.22)
+    >>> p.head_on_deg, p.head_on_doubt_deg, p.excuse, p.inaction, p.side_17c, p.own_clearance
+    (13.0, 22.5, 'forced', 'no-action', 'onset', True)
+    """
+    m = check_range("metres_per_length", metres_per_length, 0.0, None, low_open=True, unit="m")
+    s = check_range("seconds_per_unit", seconds_per_unit, 0.0, None, low_open=True, unit="s")
+    nm = NAUTICAL_MILE / m
+    return ScoringProfile(
+        name="published", d_risk=nm, t_risk=420.0 / s, r_risk=math.inf,
+        head_on_deg=13.0, head_on_heading_deg=None, stern_deg=112.5, overtaking_bow_deg=45.0,
+        t_lookback=4.0, course_detectable_deg=2.0, course_apparent_deg=30.0, speed_detectable=0.2,
+        speed_apparent=0.5, starboard_min_deg=10.0, course_tolerance_deg=2.0, speed_tolerance=0.2,
+        late_tcpa=None, late_range=2.0 * nm, must_tcpa=60.0 / s, must_range=None,
+        r_col=2.0, r_nm=4.0, r_min=nm, r_pref=2.0 * nm, gamma_col=0.5, gamma_nm=0.3, gamma_min=0.2, d_safe=nm,
+        d_ahead=nm, ahead_contact_deg=45.0, head_on_doubt_deg=22.5, late_after_onset=60.0 / s, must_cpa=4.0,
+        excuse="forced", inaction="no-action", side_17c="onset", own_clearance=True, past_clear=2.0 * nm,
+        **_WEIGHTS)
+
+
+#: names accepted by :func:`scoring_profile`; the first is the default of every report
+SCORING_PROFILES = {"published": published, "iitm-lab": iitm_lab, "ntnu-2023": ntnu_2023}
+
+DEFAULT_PROFILE = "published"
+"""The profile of every report unless another is asked for."""
 
 
 def scoring_profile(profile=None) -> ScoringProfile:
-    """A :class:`ScoringProfile` from its name (a key of :data:`SCORING_PROFILES`), itself, or ``None`` (the lab's).
+    """A :class:`ScoringProfile` from its name (a key of :data:`SCORING_PROFILES`), itself, or ``None``
+    (:data:`DEFAULT_PROFILE`, ``published``).
 
     Parameters
     ----------
     profile : str or ScoringProfile or None, optional
-        Profile name, a profile, or ``None`` for ``iitm-lab``.
+        Profile name, a profile, or ``None`` for the default.
 
     Returns
     -------
@@ -309,17 +473,17 @@ def scoring_profile(profile=None) -> ScoringProfile:
     Examples
     --------
     >>> scoring_profile().name, scoring_profile("ntnu-2023").name
-    ('iitm-lab', 'ntnu-2023')
+    ('published', 'ntnu-2023')
     >>> scoring_profile("strict")
     Traceback (most recent call last):
     ...
-    mmg_casadi.errors.InputError: profile: expected one of: iitm-lab, ntnu-2023, got 'strict'
+    mmg_casadi.errors.InputError: profile: expected one of: published, iitm-lab, ntnu-2023, got 'strict'
     """
     if isinstance(profile, ScoringProfile):
         return profile
     if profile is not None and profile not in SCORING_PROFILES:
         raise InputError("profile", f"one of: {', '.join(SCORING_PROFILES)}", profile)
-    return _named("iitm-lab" if profile is None else profile)
+    return _named(DEFAULT_PROFILE if profile is None else profile)
 
 
 @functools.lru_cache(maxsize=None)

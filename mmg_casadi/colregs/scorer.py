@@ -11,32 +11,36 @@ and graded score (numpy, vectorised over the stored trajectory).
 3. rules of the role (:mod:`mmg_casadi.colregs.give_way_rules`, :mod:`mmg_casadi.colregs.stand_on_rules`): Rules
    8, 13, 14, 15, 16, 17(a)(i), 17(a)(ii), 17(b), 17(c), each a :class:`~mmg_casadi.colregs.verdict.RuleResult`;
 4. several ships (:mod:`mmg_casadi.colregs.duties`): conflicting duties flagged (Rule 2(b)); 17(a)(i) excused
-   while a give-way duty to another ship is open;
+   where a give-way duty to another ship forces the change (policy ``excuse``); an encounter records whether the
+   excuse changed its verdict (``excuse_changed``);
 5. an encounter that ends before its closest point of approach (:func:`unfinished`: a ship stopped sailing, or the
    run ended, while the range still closed) is ``unfinished``: its rules are not judged, since every rule's verdict
    and score is taken at the actual CPA, which it never reached.
 
 An encounter's ``score`` is the mean of its rules' scores, ``compliant`` whether every applicable rule is kept.
-Thresholds: a :class:`~mmg_casadi.colregs.profiles.ScoringProfile` (``iitm-lab`` by default, or ``ntnu-2023``).
+Thresholds: a :class:`~mmg_casadi.colregs.profiles.ScoringProfile` (``published`` by default, ``iitm-lab`` or
+``ntnu-2023``).
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from mmg_casadi.colregs.context import encounter_context
 from mmg_casadi.colregs.duties import Duty, conflicts, excused_samples
+from mmg_casadi.colregs.geometry import wrap_to_pi
 from mmg_casadi.colregs.give_way_rules import give_way_rules
 from mmg_casadi.colregs.kinematics import PairGeometry, ground_velocity, pair_geometry
 from mmg_casadi.colregs.profiles import scoring_profile
-from mmg_casadi.colregs.risk import release_range, risk_episodes, risk_of_collision
-from mmg_casadi.colregs.roles import ENCOUNTER_OF_ROLE, GIVE_WAY_ROLES
+from mmg_casadi.colregs.risk import RiskEpisode, release_range, risk_episodes, risk_of_collision
+from mmg_casadi.colregs.roles import ENCOUNTER_OF_ROLE, GIVE_WAY_ROLES, OVERTAKING_ROLES
 from mmg_casadi.colregs.stand_on_rules import stand_on_rules
 from mmg_casadi.colregs.verdict import RULES, json_value
 
-SCORER_VERSION = 4
+SCORER_VERSION = 5
 """Version of the verdicts :func:`score_encounters` gives: a statistics table records it and is resumed only by the
 same version. 2: a ship's speed at the sample she stops (reaches her goal) is a one-sided difference of her
 positions (:func:`~mmg_casadi.colregs.kinematics.ground_velocity` with ``active``); version 1 halved it there, which
@@ -45,7 +49,13 @@ ship's change of side of the line as it was at the earlier sample
 (:func:`~mmg_casadi.colregs.manoeuvre.course_line_crossings`); versions 1 and 2 also counted the other ship's turn
 that swept her course line across the own ship as the own ship crossing ahead. 4: an encounter that ends before its
 CPA (a ship reaches her goal, or the run ends, while the range still closes) is unfinished and not judged
-(:func:`unfinished`); version 3 took the range at its end as the CPA."""
+(:func:`unfinished`); version 3 took the range at its end as the CPA. 5: the profile's policies
+(:class:`~mmg_casadi.colregs.profiles.ScoringProfile`): a stand-on ship's change is excused only where a give-way
+duty to another ship forces it; she may act alone once the give-way ship's inaction is apparent (no readily apparent
+change of hers at or after her ample time), not at the end of that time alone; Rule 17(c) counts every port turn for
+a ship on the port side at the onset; a give-way ship's own action must give the safe passing distance; the safety
+score includes the pose at the CPA; Rule 14(c)'s doubt band and a reaction time after the onset where a profile
+sets them. The policies of version 4 remain selectable for comparison."""
 
 
 @dataclass(frozen=True)
@@ -78,6 +88,9 @@ class Encounter:
     unfinished : bool
         Whether the encounter ended before its CPA (:func:`unfinished`); then ``rules`` is empty and neither
         ``score`` nor ``compliant`` is given.
+    excuse_changed : bool
+        Whether a give-way duty to another ship excused a change of this stand-on encounter and so changed a rule's
+        verdict (or which rules apply).
 
     Examples
     --------
@@ -101,13 +114,14 @@ class Encounter:
     conflicts_with: tuple = ()
     quantities: dict = field(default_factory=dict)
     unfinished: bool = False
+    excuse_changed: bool = False
 
-    @property
+    @functools.cached_property
     def score(self) -> float | None:
         """Mean of the applicable rules' scores (``None`` if none applies)."""
         return float(np.mean([r.score for r in self.rules.values()])) if self.rules else None
 
-    @property
+    @functools.cached_property
     def compliant(self) -> bool | None:
         """Whether every applicable rule is kept (``None`` if none applies)."""
         return all(r.verdict for r in self.rules.values()) if self.rules else None
@@ -131,11 +145,11 @@ class Encounter:
         dict
             Keys ``own``, ``other``, ``profile``, ``applicable``, ``unfinished``, ``encounter``, ``role``,
             ``onset``, ``release``, ``closest``, ``score``, ``compliant``, ``conflicting_duties``,
-            ``conflicts_with``, ``rules`` and ``quantities``; NaN and infinities as None.
+            ``conflicts_with``, ``excuse_changed``, ``rules`` and ``quantities``; NaN and infinities as None.
         """
         return json_value({
             "own": self.own_name, "other": self.other_name, "profile": self.profile, "applicable": self.applicable,
-            "unfinished": self.unfinished,
+            "unfinished": self.unfinished, "excuse_changed": self.excuse_changed,
             "encounter": self.encounter, "role": self.role, "onset": self.onset, "release": self.release,
             "closest": self.closest, "score": self.score, "compliant": self.compliant,
             "conflicting_duties": self.conflicting_duties, "conflicts_with": list(self.conflicts_with),
@@ -228,6 +242,23 @@ def unfinished(episode, both, rng, tcpa, d_safe) -> bool:
     return bool(last and episode.cpa == k and tcpa[k] > 0.0 and rng[k] >= d_safe)
 
 
+def _until_past_and_clear(episodes, k, geometry, both, distance):
+    """Rule 13(d): an overtaking encounter lasts until the overtaking ship is finally past and clear (the range
+    opens beyond ``distance``); later stretches of risk of the pair before that belong to it. Returns the index of
+    the last episode absorbed and the merged episode."""
+    ep = episodes[k]
+    while k + 1 < len(episodes):
+        after = np.arange(ep.cpa + 1, len(both))
+        clear = after[both[after] & (geometry.range[after] > distance) & (geometry.tcpa[after] <= 0.0)]
+        if clear.size and episodes[k + 1].onset >= clear[0]:
+            break
+        k += 1
+        span = np.arange(ep.onset, episodes[k].release + 1)
+        cpa = int(span[np.argmin(np.where(both[span], geometry.range[span], np.inf))])
+        ep = RiskEpisode(ep.onset, cpa, episodes[k].release)
+    return k, ep
+
+
 def _run_start(both, k) -> int:
     """First sample of the stretch of ``both`` that contains sample ``k``."""
     gaps = np.flatnonzero(~both[:k])
@@ -250,7 +281,8 @@ def _quantities(ctx) -> dict:
             "beta_deg": float(np.degrees(ctx.bearing)), "alpha_deg": float(np.degrees(ctx.contact)),
             "beta_onset_deg": float(np.degrees(ctx.beta[k0])), "alpha_onset_deg": float(np.degrees(ctx.alpha[k0])),
             "speed": float(ctx.speed[ctx.base]), "speed_other": float(ctx.speed_other[ctx.base_other]),
-            "t_late": ctx.at(ctx.late), "t_must": ctx.at(ctx.must), "speed_max_before": ctx.speed_max}
+            "t_late": ctx.at(ctx.late), "t_apparent": ctx.at(ctx.apparent), "t_must": ctx.at(ctx.must),
+            "speed_max_before": ctx.speed_max, "own_clearance": ctx.clearance, "head_on_in_doubt": ctx.doubt}
 
 
 def score_encounters(t, pos, psi, speed=None, active=None, profile=None, *, names=None, own=None) -> list[Encounter]:
@@ -283,21 +315,67 @@ def score_encounters(t, pos, psi, speed=None, active=None, profile=None, *, name
     Examples
     --------
     The paper's crossing with both ships holding course: the give-way ship fails Rules 8, 15 and 16; the stand-on
-    ship keeps her course (17(a)(i)) but does not act when she must (17(b)).
+    ship keeps her course (17(a)(i)) but does not act when she must (17(b), from 60 s before the CPA). The published
+    profile sees the risk from a TCPA of 420 s (t = 2.5), the laboratory's from R_safe = 15 L (t = 14.5).
 
     >>> t = np.arange(0.0, 40.0, 0.25)
     >>> pos = np.stack([np.column_stack([t, 0 * t]), np.column_stack([25 + 0 * t, 25 - t])], axis=1)
     >>> psi = np.column_stack([0 * t, -np.pi / 2 + 0 * t])
     >>> a, b = score_encounters(t, pos, psi)
     >>> a.role, a.onset["t"], {r: v.verdict for r, v in a.rules.items()}
-    ('give-way', 14.5, {'8': False, '16': False, '15': False})
-    >>> b.role, {r: v.verdict for r, v in b.rules.items()}
-    ('stand-on', {'17a_i': True, '17b': False, '8': True})
+    ('give-way', 2.5, {'8': False, '16': False, '15': False})
+    >>> b.role, {r: (v.verdict, v.terms.get("t_broken")) for r, v in b.rules.items()}
+    ('stand-on', {'17a_i': (True, None), '17b': (False, 22.0), '8': (True, None)})
+    >>> score_encounters(t, pos, psi, profile="iitm-lab")[0].onset["t"]
+    14.5
     """
-    profile = scoring_profile(profile)
+    return score_prepared(prepare(t, pos, psi, speed, active, own=own), profile, names=names)
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """What every profile's scoring of one trajectory shares (:func:`prepare`): the validated arrays, the ships'
+    series and the relative geometry of every scored ordered pair.
+
+    Parameters
+    ----------
+    t : numpy.ndarray (T,)
+        Sample times.
+    psi, speed, active : numpy.ndarray (T, N)
+        Headings, speeds over the ground and sailing flags.
+    ships : list of dict
+        Per ship ``pos``, ``psi``, ``vel``, ``speed``, ``active``.
+    rows : list of int
+        The own ships scored.
+    geometry : PairGeometry
+        Arrays ``(T, len(rows), N)``.
+    """
+
+    t: np.ndarray
+    psi: np.ndarray
+    speed: np.ndarray
+    active: np.ndarray
+    ships: list
+    rows: list
+    geometry: PairGeometry
+
+
+def prepare(t, pos, psi, speed=None, active=None, *, own=None) -> Prepared:
+    """The profile-independent part of :func:`score_encounters` (velocities over the ground, the pairs' geometry),
+    computed once for scoring one trajectory under several profiles (:func:`score_prepared`).
+
+    Parameters
+    ----------
+    t, pos, psi, speed, active, own
+        As :func:`score_encounters`.
+
+    Returns
+    -------
+    Prepared
+        The arrays every profile's scoring reads.
+    """
     t, pos, psi, vel, speed, active = _as_arrays(t, pos, psi, speed, active)
     n = pos.shape[1]
-    names = [f"ship{i}" for i in range(n)] if names is None else [str(x) for x in names]
     rows = list(range(n)) if own is None else [int(i) for i in np.atleast_1d(own)]
     if any(not 0 <= i < n for i in rows):
         raise ValueError(f"own: expected ship indices in [0, {n}), got {own}")
@@ -305,33 +383,88 @@ def score_encounters(t, pos, psi, speed=None, active=None, profile=None, *, name
                       vel[:, rows, None, :], vel[:, None, :, :])
     ships = [{"pos": pos[:, i], "psi": psi[:, i], "vel": vel[:, i], "speed": speed[:, i], "active": active[:, i]}
              for i in range(n)]
+    return Prepared(t, psi, speed, active, ships, rows, g)
+
+
+def score_prepared(prep: Prepared, profile=None, *, names=None, applicable_only: bool = False) -> list[Encounter]:
+    """:func:`score_encounters` of a trajectory from :func:`prepare` under ``profile``.
+
+    Parameters
+    ----------
+    prep : Prepared
+        The trajectory's shared arrays.
+    profile : ScoringProfile or str, optional
+        Thresholds or a profile name (default ``"published"``).
+    names : sequence of str, optional
+        Ship names (default ``ship0``, ``ship1``, ...).
+    applicable_only : bool, default False
+        Leave out the pairs without a risk of collision (they carry no verdict).
+
+    Returns
+    -------
+    list of Encounter
+        Ordered by own ship, other ship and onset.
+    """
+    profile = scoring_profile(profile)
+    t, psi, speed, active, ships, g = prep.t, prep.psi, prep.speed, prep.active, prep.ships, prep.geometry
+    n = len(ships)
+    names = [f"ship{i}" for i in range(n)] if names is None else [str(x) for x in names]
     out = []
-    for row, i in enumerate(rows):
+    # the Rule 7 gate of every scored pair at once; a pair without a single sample of risk has no encounter
+    sailing = active[:, prep.rows, None] & active[:, None, :]
+    gate = risk_of_collision(g.cpa, g.tcpa, g.range, sailing, profile)
+    any_risk = gate.any(axis=0)
+    for row, i in enumerate(prep.rows):
         contexts, plain = [], []
         for j in (j for j in range(n) if j != i):
-            both = active[:, i] & active[:, j]
+            both = sailing[:, row, j]
+            if not any_risk[row, j]:
+                if not applicable_only:
+                    plain.append(Encounter(i, j, names[i], names[j], profile.name, False, quantities=json_value({
+                        "min_range": float(np.min(g.range[both, row, j])) if both.any() else None})))
+                continue
             gij = PairGeometry(*(getattr(g, f)[:, row, j] for f in ("range", "beta", "alpha", "cpa", "tcpa")))
-            risk = risk_of_collision(gij.cpa, gij.tcpa, gij.range, both, profile)
+            risk = gate[:, row, j]
             episodes = risk_episodes(gij.range, gij.tcpa, risk, both, release_range(profile))
-            if not episodes:
+            if not episodes and not applicable_only:
                 plain.append(Encounter(i, j, names[i], names[j], profile.name, False, quantities=json_value({
                     "min_range": float(np.min(gij.range[both])) if both.any() else None})))
             last = int(np.flatnonzero(both)[-1]) if both.any() else 0
-            for k, ep in enumerate(episodes):
+            k = 0
+            while k < len(episodes):
+                ep = episodes[k]
                 end = episodes[k + 1].onset - 1 if k + 1 < len(episodes) else last
-                contexts.append((j, encounter_context(t, ships[i], ships[j], gij, risk, ep,
-                                                      _run_start(both, ep.onset), end, profile),
-                                 unfinished(ep, both, gij.range, gij.tcpa, profile.d_safe)))
+                ctx = encounter_context(t, ships[i], ships[j], gij, risk, ep, _run_start(both, ep.onset), end, profile)
+                if ctx.role in OVERTAKING_ROLES and profile.past_clear is not None:
+                    k, ep = _until_past_and_clear(episodes, k, gij, both, profile.past_clear)
+                    if ep is not ctx.episode:
+                        end = episodes[k + 1].onset - 1 if k + 1 < len(episodes) else last
+                        ctx = encounter_context(t, ships[i], ships[j], gij, risk, ep, _run_start(both, ep.onset),
+                                                end, profile)
+                contexts.append((j, ctx, unfinished(ep, both, gij.range, gij.tcpa, profile.d_safe)))
+                k += 1
         duties = [Duty(j, c.role, c.base if c.role in GIVE_WAY_ROLES else c.episode.onset, c.episode.onset,
-                       c.episode.release) for j, c, _ in contexts]
+                       c.episode.release, c.episode.cpa, c.risk) for j, c, _ in contexts]
         clash = conflicts(duties)
+        turn = slowing = None
+        if profile.excuse == "forced":
+            turn = np.concatenate([[0.0], wrap_to_pi(np.diff(psi[:, i]))])
+            slowing = np.concatenate([[False], np.diff(speed[:, i]) < 0.0])
         for k, (j, c, cut) in enumerate(contexts):
-            rules = {} if cut else give_way_rules(c) if c.role in GIVE_WAY_ROLES else stand_on_rules(
-                c, excused_samples(duties, k, t.size))
+            rules, changed = {}, False
+            if not cut and c.role in GIVE_WAY_ROLES:
+                rules = give_way_rules(c)
+            elif not cut:
+                excused = excused_samples(duties, k, t.size, profile.excuse, turn, slowing)
+                rules = stand_on_rules(c, excused)
+                if excused.any():
+                    unexcused = stand_on_rules(c, np.zeros(t.size, bool))
+                    changed = unexcused.keys() != rules.keys() or any(unexcused[r].verdict != v.verdict
+                                                                      for r, v in rules.items())
             onset, release, closest = _times(c)
             out.append(Encounter(i, j, names[i], names[j], profile.name, True,
                                  ENCOUNTER_OF_ROLE[c.role], c.role, json_value(onset), json_value(release),
                                  json_value(closest), rules, tuple(names[x] for x in clash[k]),
-                                 json_value(_quantities(c)), cut))
+                                 _quantities(c), cut, changed))
         out.extend(plain)
     return sorted(out, key=lambda e: (e.own, e.other, -1.0 if e.onset is None else e.onset["t"]))

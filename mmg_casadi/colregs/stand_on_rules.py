@@ -4,26 +4,31 @@ Her course and speed are measured from the onset of risk to the CPA against her 
 (after a stretch excused by a give-way duty to another ship, against those at its end,
 :mod:`mmg_casadi.colregs.duties`); only speed above the highest she sailed before the onset is an increase.
 **Her action** is the first counted sample where the course changed by ``course_tolerance_deg`` or more or the speed
-by ``speed_tolerance`` or more. The give-way ship's inaction is apparent from ``late`` (the risk persists past her
-ample time); the stand-on ship must act from ``must`` (:mod:`mmg_casadi.colregs.risk`).
+by ``speed_tolerance`` or more. She may act alone from ``apparent``, when the give-way ship's inaction is apparent,
+and must act from ``must`` (:func:`mmg_casadi.colregs.context.timing`); her **free** sample is the first of the two
+(policy ``inaction = "late"``, scorer version 4: ``late``).
 
-* **17(a)(i)**, keep course and speed (applies while she must keep them, from the onset to ``late`` or the CPA):
-  S = max(0, 1 − w_so,χ·P_course − w_so,up·P_up − w_so,down·P_down), each P ramped from detectable to readily
-  apparent (Hagen 2023). Verdict: course change below ``course_tolerance_deg`` and speed changes below
+* **17(a)(i)**, keep course and speed (applies while she must keep them, from the onset to the free sample or the
+  CPA): S = max(0, 1 − w_so,χ·P_course − w_so,up·P_up − w_so,down·P_down), each P ramped from detectable to
+  readily apparent (Hagen 2023). Verdict: course change below ``course_tolerance_deg`` and speed changes below
   ``speed_tolerance`` throughout.
 * **17(a)(ii)**, action alone once the inaction is apparent (applies if she acted): verdict: she acted at or after
-  ``late``; score 1, else how far into her stand-on time she waited, (t_action − t_onset)/(t_late − t_onset)
-  (to the CPA if ``late`` never came).
+  the free sample; score 1, else how far into her stand-on time she waited, (t_action − t_onset)/(t_free −
+  t_onset) (to the CPA if it never came).
 * **17(b)**, action when collision cannot be avoided by the give-way ship alone (applies if ``must`` came):
   S = (1 − P_late)·(1 − P_na), P_late = ramp of the time of action from ``must`` to the CPA (0 for an action
   before ``must``), 0 without action. Verdict: she acted, with a readily apparent change, before the CPA.
-* **17(c)** (crossing stand-on ship that acted): no alteration to port while the other ship is on her port side:
-  S = 1 − ramp(port alteration, detectable, apparent). Verdict: the port alteration stays below
-  ``course_tolerance_deg``.
+* **17(c)** (crossing stand-on ship that acted): no alteration to port for a ship on her port side (at the onset;
+  policy ``side_17c = "now"``, version 4: at each sample, which misses a port turn that swings the other ship onto
+  the starboard side): S = 1 − ramp(port alteration, detectable, apparent). Verdict: the port alteration stays
+  below ``course_tolerance_deg``.
 * **Rule 8**: without action nothing is judged and she keeps it (score 1; a drift within tolerance is not action,
   so it passes Rule 8 as it passes 17(a)(i)); with action S = 1 − P_na, verdict: readily apparent. The timing of
   her action is Rule 17's; the passing distance is the give-way ship's (her Rules 8 and 16): a stand-on ship
-  acting at the last moment cannot be blamed for how close the give-way ship let them come.
+  acting at the last moment cannot be blamed for how close the give-way ship let them come (Cockcroft & Lameijer
+  p. 72: Rule 8(d) does not apply to action under 17(a)(ii) or 17(b)).
+
+A rule not kept names ``t_broken``, the first sample at which it broke.
 """
 
 from __future__ import annotations
@@ -99,10 +104,11 @@ def stand_on_rules(ctx, excused) -> dict:
     m = measure_manoeuvre(ctx.psi, ctx.speed, window, ref, ctx.speed[ref], ctx.speed_max,
                           course_threshold_deg=p.course_tolerance_deg, speed_threshold=p.speed_tolerance)
     action = m.action
-    stop = e.cpa + 1 if ctx.late is None else ctx.late
+    free = free_sample(ctx)
+    stop = e.cpa + 1 if free is None else free
     held = window < stop
     out = {}
-    excused_time = float(np.sum(np.gradient(ctx.t)[span][~counted]))
+    excused_time = float(np.sum(np.gradient(ctx.t)[span][~counted])) if not counted.all() else 0.0
     if held.any():
         course = float(np.max(np.abs(m.course_change[held])))
         up, down = float(np.max(m.speed_increase[held])), float(np.max(m.speed_decrease[held]))
@@ -110,31 +116,65 @@ def stand_on_rules(ctx, excused) -> dict:
         kept = course < p.course_tolerance_deg and up < p.speed_tolerance and down < p.speed_tolerance
         out["17a_i"] = RuleResult(kept, pen["score"], {
             "until": ctx.at(int(window[held][-1])), "course_change_deg": course, "speed_increase": up,
-            "speed_decrease": down, "excused_time": excused_time, **{k: v for k, v in pen.items() if k != "score"}})
+            "speed_decrease": down, "excused_time": excused_time, **{k: v for k, v in pen.items() if k != "score"},
+            "t_broken": None if kept else ctx.at(int(window[held][np.argmax(_changed(m, held, p))]))})
     if action is not None:
-        t_end = ctx.at(ctx.late if ctx.late is not None else e.cpa)
+        t_end = ctx.at(free if free is not None else e.cpa)
         waited = float(ramp(ctx.t[action], ctx.t[e.onset], t_end))
-        permitted = ctx.late is not None and action >= ctx.late
+        permitted = free is not None and action >= free
         out["17a_ii"] = RuleResult(permitted, 1.0 if permitted else waited,
-                                   {"t_action": ctx.at(action), "t_late": ctx.at(ctx.late)})
+                                   {"t_action": ctx.at(action), "t_late": ctx.at(ctx.late),
+                                    "t_apparent": ctx.at(ctx.apparent), "t_free": ctx.at(free),
+                                    "t_broken": None if permitted else ctx.at(action)})
     apparent = m.max_course_change_deg >= p.course_apparent_deg or m.max_speed_decrease >= p.speed_apparent
     p_na = non_apparent_penalty(m.max_course_change_deg, m.max_speed_decrease, p)
     if ctx.must is not None:
         p_late = 1.0 if action is None else float(ramp(ctx.t[action], ctx.t[ctx.must], ctx.t[e.cpa]))
         score = 0.0 if action is None else (1.0 - p_late) * (1.0 - p_na)
-        out["17b"] = RuleResult(action is not None and apparent, score, {
+        kept = action is not None and apparent
+        out["17b"] = RuleResult(kept, score, {
             "t_must": ctx.at(ctx.must), "t_action": ctx.at(action), "course_change_deg": m.max_course_change_deg,
-            "speed_reduction": m.max_speed_decrease, "readily_apparent": apparent, "P_late": p_late, "P_na": p_na})
+            "speed_reduction": m.max_speed_decrease, "readily_apparent": apparent, "P_late": p_late, "P_na": p_na,
+            "t_broken": None if kept else ctx.at(ctx.must)})
     if ctx.role == "stand-on" and action is not None:
-        after = (window >= action) & (ctx.beta[window] < 0.0)
+        side = ctx.bearing < 0.0 if p.side_17c == "onset" else ctx.beta[window] < 0.0
+        after = (window >= action) & side
         port = float(max(0.0, -np.min(m.course_change[after], initial=0.0)))
-        out["17c"] = RuleResult(port < p.course_tolerance_deg,
-                                1.0 - float(ramp(port, p.course_detectable_deg, p.course_apparent_deg)),
-                                {"port_change_deg": port, "t_action": ctx.at(action)})
+        kept = port < p.course_tolerance_deg
+        broke = None if kept else int(window[after][np.argmax(-m.course_change[after] >= p.course_tolerance_deg)])
+        out["17c"] = RuleResult(kept, 1.0 - float(ramp(port, p.course_detectable_deg, p.course_apparent_deg)),
+                                {"port_change_deg": port, "t_action": ctx.at(action), "t_broken": ctx.at(broke)})
     if action is None:
         out["8"] = RuleResult(True, 1.0, {"acted": False, "cpa": ctx.cpa})
     else:
         out["8"] = RuleResult(apparent, 1.0 - p_na, {
             "acted": True, "t_action": ctx.at(action), "course_change_deg": m.max_course_change_deg,
-            "speed_reduction": m.max_speed_decrease, "readily_apparent": apparent, "cpa": ctx.cpa, "P_na": p_na})
+            "speed_reduction": m.max_speed_decrease, "readily_apparent": apparent, "cpa": ctx.cpa, "P_na": p_na,
+            "t_broken": None if apparent else ctx.at(int(ctx.episode.cpa))})
     return out
+
+
+def free_sample(ctx) -> int | None:
+    """The sample from which a stand-on ship may act alone: the first of ``apparent`` (Rule 17(a)(ii)) and ``must``
+    (17(b)); ``late`` under the policy ``inaction = "late"`` (scorer version 4).
+
+    Parameters
+    ----------
+    ctx : EncounterContext
+        The encounter.
+
+    Returns
+    -------
+    int or None
+        The sample, or None if neither comes before the CPA.
+    """
+    if ctx.profile.inaction == "late":
+        return ctx.late
+    times = [k for k in (ctx.apparent, ctx.must) if k is not None]
+    return min(times) if times else None
+
+
+def _changed(m, held, profile) -> np.ndarray:
+    """Where, among the held samples of manoeuvre ``m``, the course or speed left the stand-on tolerance."""
+    return ((np.abs(m.course_change[held]) >= profile.course_tolerance_deg)
+            | (m.speed_increase[held] >= profile.speed_tolerance) | (m.speed_decrease[held] >= profile.speed_tolerance))

@@ -150,15 +150,16 @@ class ColregsVortexParams:
         paper's Λ = −100 at the 15 L detection range (100 / 2π 15 ≈ 1.06).
     dpsi_min : float
         Minimum alteration, from the heading at the onset of a give-way duty or of the stand-on action, Rule 8
-        "readily apparent" (rad, [0, π/2]); 30° as NTNU's evaluator (Hagen et al. 2023 configuration, Δχ_app).
+        "readily apparent" (rad, [0, π/2]); 30°, an alteration seen at once by eye and radar (the published
+        evaluators' number too; this default does not read it).
     d_clear : float
         Planned-course passing distance below which a give-way (or acting stand-on) ship keeps its alteration
         (L, > 0); 6 L = 3 collision distances, above the 4 L the vortex aims at so the ship resumes its course
         only when clear.
     d_risk : float
         Risk of collision, the onset of an encounter: passing distance at the present velocities below this
-        while the range closes (L, > 0); 4 L = twice the paper's 2 L collision distance, as the iitm-lab
-        scoring profile's gate.
+        while the range closes (L, > 0); 4 L = twice the paper's 2 L collision distance (the iitm-lab scoring
+        profile's gate has the same number; this default does not read it).
     v_ship_min : float
         Neighbours slower than this are static obstacles without COLREG role, and a ship that closes more slowly
         than this is past (U, > 0); 0.05 is below the slowest ship speed a scenario allows (0.2).

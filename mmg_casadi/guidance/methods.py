@@ -1,15 +1,13 @@
-"""The method registry: each collision-avoidance method's name, guidance builder and parameter groups.
+"""The method registry: each collision-avoidance method's name, guidance builder and parameters.
 
 The closed-loop step (:mod:`mmg_casadi.closed_loop.step`), the scenario loader, the studies, the Monte Carlo study,
-the benchmarks and the CLI all read :data:`METHODS`; adding a method is one entry here plus its builder.
+the tuners, the benchmarks and the CLI all read the one live registry :data:`METHODS`; adding a method is one
+:class:`Method` and one call of :func:`register` (a plugin module, :mod:`mmg_casadi.guidance.plugins`, does that
+when it is loaded with ``--plugin`` or installed under the entry-point group ``mmg_casadi.methods``).
 
-A builder takes a :class:`GuidanceInputs` (CasADi expressions of one ship and its neighbours inside the
-closed-loop step) and returns a :class:`Command`: the 2×1 desired-heading vector of the method and, if the method
-declares ``commands_speed``, a desired propeller speed (rev/min), which the closed loop passes through the engine
-(:func:`mmg_casadi.vessel.actuators.engine_step`). The closed loop adds the hazards' field (channel walls) and steers
-along the sum while any neighbour is within R_safe (or a wall within its range); outside it the ship follows ILOS
-at its service propeller speed. A method that needs memory across steps declares its rows (``memory``); the
-closed loop adds them to the state of every ship of a layout that uses the method.
+The contract of a method (what its builder sees and returns, when it is in charge, how it declares its
+parameters, groups and memory) is written where it is defined, in :mod:`mmg_casadi.guidance.contract`
+(:class:`Method`, :class:`GuidanceInputs`, :class:`Command`; re-exported here and by :mod:`mmg_casadi`).
 
 Examples
 --------
@@ -21,11 +19,14 @@ Examples
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Callable
 
+import contextlib
+import contextvars
 import dataclasses
 import functools
+import importlib.metadata
+import re
 
 import casadi as ca
 
@@ -37,187 +38,11 @@ from mmg_casadi.guidance import velocity_obstacle
 from mmg_casadi.guidance.colregs_encounters import giveway_open
 from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams
 from mmg_casadi.errors import InputError, ParameterError
+from mmg_casadi.guidance.contract import (Command, GuidanceInputs, Method, command_from_vector,  # noqa: F401 (re-exported)
+                                         command_vector, input_name)
+from mmg_casadi.params import CLOSED_LOOP_GROUPS, PARAMETERS, Param, add_group, groups as param_groups, remove_group
 from mmg_casadi.vessel.library import load_vessel
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
-
-
-@dataclass(frozen=True)
-class GuidanceInputs:
-    """What a method's builder sees of one ship inside the closed-loop step (CasADi expressions).
-
-    Parameters
-    ----------
-    pos, vel : SX (2×1)
-        Own position (L) and global velocity over the ground (U; through the water plus any current).
-    psi, speed : SX
-        Own heading (rad) and speed over ground (U).
-    goal : SX (2×1)
-        The waypoint being tracked (L).
-    nb_pos, nb_vel : SX (2×M)
-        Neighbours' positions and global velocities over the ground (other ships, then static obstacles with
-        zero velocity).
-    nb_radius, active : SX (1×M)
-        Neighbours' radii (L) and the 0/1 (or smooth) mask of neighbours present within R_safe.
-    P : dict
-        The step's named numeric parameters (:data:`~mmg_casadi.closed_loop.layout.GLOBAL_PARAMS`, angles in rad).
-    layout : Layout
-        The closed loop's shape (structural parameters such as the velocity obstacle's candidates and cone).
-    memory : dict
-        The method's memory rows (:attr:`Method.memory`) at the start of the step, by name.
-    service_rpm : SX, optional
-        The ship's service propeller speed (rev/min), the speed it sails at when no method commands another.
-    walls : SX (4×W), optional
-        The layout's wall and land segments (L), given only when it has some (``None`` otherwise, so a method's
-        land test exists only in layouts with walls).
-    half_beam : SX, optional
-        Half the ship's beam (L), given with ``walls``.
-    """
-
-    pos: object
-    vel: object
-    psi: object
-    speed: object
-    goal: object
-    nb_pos: object
-    nb_vel: object
-    nb_radius: object
-    active: object
-    P: dict
-    layout: object
-    memory: dict = dataclasses.field(default_factory=dict)
-    service_rpm: object = None
-    walls: object = None
-    half_beam: object = None
-
-
-@dataclass(frozen=True)
-class Command:
-    """What a method commands for one step.
-
-    Parameters
-    ----------
-    heading : SX (2×1)
-        Desired-heading vector (its direction is the desired heading; the closed loop adds the hazards' field).
-    rpm : SX, optional
-        Desired propeller speed (rev/min); only read for a method with ``commands_speed``; ``None`` keeps the
-        ship's service propeller speed.
-    memory : dict, optional
-        Next value of each of the method's memory rows while it is in charge (by name); when no neighbour is within
-        R_safe the closed loop resets every memory row to the ship's heading after the step.
-    """
-
-    heading: object
-    rpm: object = None
-    memory: dict = dataclasses.field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class Method:
-    """One registered method.
-
-    Parameters
-    ----------
-    name : str
-        Name in scenario files, ``--method`` and the Python API.
-    builder : callable or None
-        ``GuidanceInputs -> 2×1 desired-heading vector``; ``None`` for pure ILOS waypoint tracking.
-    groups : tuple of str
-        Parameter groups (:data:`mmg_casadi.params.GROUPS`) the builder reads.
-    source : str
-        Where the method comes from.
-    inputs : tuple of str
-        Numeric step inputs only this method reads (names of :data:`GuidanceInputs.P`, table angles in rad
-        without the ``_deg`` suffix); they enter the compiled step only of layouts where a ship uses the method,
-        so adding a method leaves every other compiled closed loop unchanged.
-    goal_capture : bool
-        A ship that passed its final waypoint outside the acceptance radius turns back to it (the paper's ILOS
-        follows the extended last leg for ever; kept for the paper's methods), and an earlier waypoint she passed
-        abeam outside it counts as passed (the paper switches only within the radius, so a ship that avoided
-        something near a waypoint turns back to it).
-    memory : tuple of str
-        Names of the method's memory rows (state rows of each ship, rad; see :class:`Command`).
-    commands_speed : bool
-        The builder's :class:`Command` carries a propeller speed.
-    wall_inputs : tuple of str
-        Numeric step inputs the method reads only in layouts with walls or land (its land test); they enter the
-        compiled step only of such layouts.
-    turn_limit : str or None
-        One of ``inputs``: while ILOS steers the ship (no neighbour within R_safe) and she is farther than R_safe
-        from her next waypoint, the heading ordered is at most this far from her present heading (rad), so she
-        turns at a moderate rate; None: ILOS's heading as it is.
-    lookout : str or None
-        One of ``inputs``: the builder also gets the neighbours within R_safe plus this range (L) as active, and
-        ignores those beyond R_safe it has no use for; None: R_safe.
-    engaged : callable or None
-        ``memory -> SX``, from the method's memory rows after the step (by name): 1 while the method steers although
-        no neighbour is within R_safe (an encounter with a ship within its lookout), so the closed loop neither
-        hands the ship to ILOS nor resets the memory; None: the method steers only with a neighbour within R_safe.
-    """
-
-    name: str
-    builder: Callable | None
-    groups: tuple[str, ...]
-    source: str
-    inputs: tuple[str, ...] = ()
-    goal_capture: bool = False
-    memory: tuple[str, ...] = ()
-    commands_speed: bool = False
-    wall_inputs: tuple[str, ...] = ()
-    turn_limit: str | None = None
-    lookout: str | None = None
-    engaged: Callable | None = None
-
-    def command_size(self) -> int:
-        """Rows of the flat command vector (:func:`command_vector`): heading, rpm if any, memory rows.
-
-        Returns
-        -------
-        int
-            ``2 + commands_speed + len(memory)``.
-        """
-        return 2 + int(self.commands_speed) + len(self.memory)
-
-
-def command_vector(method: Method, command) -> ca.SX:
-    """A builder's :class:`Command` as one column (heading, then rpm if the method commands speed, then memory).
-
-    Parameters
-    ----------
-    method : Method
-        The method whose builder made ``command``.
-    command : Command
-        The builder's output.
-
-    Returns
-    -------
-    casadi.SX
-        The column, :meth:`Method.command_size` rows.
-    """
-    parts = [command.heading]
-    if method.commands_speed:
-        parts.append(command.rpm)
-    parts += [command.memory[k] for k in method.memory]
-    return ca.vertcat(*parts)
-
-
-def command_from_vector(method: Method, v) -> Command:
-    """The :class:`Command` of a column made by :func:`command_vector`.
-
-    Parameters
-    ----------
-    method : Method
-        The method whose builder made the column.
-    v : SX or MX
-        The column (:meth:`Method.command_size` rows).
-
-    Returns
-    -------
-    Command
-        Desired-heading vector (rows 0-1), rpm (None unless the method commands speed) and the memory rows by name.
-    """
-    k = 2 + int(method.commands_speed)
-    return Command(v[0:2], v[2] if method.commands_speed else None,
-                   {name: v[k + j] for j, name in enumerate(method.memory)})
 
 
 def _inverse_square(g: GuidanceInputs):
@@ -342,7 +167,7 @@ METHODS: dict[str, Method] = {m.name: m for m in (
            inputs=("vo_speed_weight", "engine_dead_slow"), memory=("held_heading",), commands_speed=True,
            wall_inputs=LAND_INPUTS),
     Method("none", None, (), "ILOS waypoint tracking only (a ship that holds its course)"),
-    Method("colregs-vortex", _colregs_vortex, ("sink-vortex", "modified-vortex", "colregs-vortex"),
+    Method("colregs-vortex", _colregs_vortex, ("sink-vortex", "modified-vortex", "colregs-vortex", "velocity-obstacle"),
            "ours: the modified vortex with COLREG Rules 8, 13 and 17 (mmg_casadi.guidance.colregs_vortex)",
            inputs=(*(f"cv_{k}" for k in _CV_FIELDS), "cv_r_look"), goal_capture=True, memory=colregs_vortex.MEMORY,
            commands_speed=True, wall_inputs=LAND_INPUTS, turn_limit="cv_dpsi_free", lookout="cv_r_look",
@@ -366,36 +191,117 @@ DEFAULT = "modified-vortex"
 """The method of a scenario that names none: the paper's proposed modified sink-vortex field."""
 
 
-def register(method: Method) -> Method:
-    """Add ``method`` to :data:`METHODS` under a new name (the shipped ones cannot be replaced).
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
+"""A method name: what scenario files, ``--methods`` lists (comma-separated) and file names can carry."""
 
-    A user's method is its builder and this one call; the closed loop, the scenario files and the studies then
-    accept its name.
+
+def _check_method(method: Method) -> Method:
+    """``method`` with its own parameters' group set to its name, or an InputError naming the first bad field."""
+    if not isinstance(method, Method):
+        raise InputError("method", "a mmg_casadi.Method", type(method).__name__)
+    if not isinstance(method.name, str) or not _NAME.fullmatch(method.name):
+        raise InputError("method.name", "letters, digits, '-', '_' or '.', starting with a letter or digit",
+                         method.name)
+    if method.builder is not None and not callable(method.builder):
+        raise InputError("method.builder", "a callable GuidanceInputs -> Command, or None", method.builder)
+    bad_group = [g for g in method.groups if g not in param_groups() and g != method.name]
+    if bad_group:
+        raise InputError("method.groups", f"parameter groups (one of: {', '.join(param_groups())})", bad_group[0])
+    own = []
+    prefix = method.param_prefix
+    for p in method.params:
+        if not isinstance(p, Param):
+            raise InputError("method.params", "mmg_casadi.params.Param declarations", p)
+        if not p.name.startswith(prefix) or len(p.name) == len(prefix):
+            raise InputError("method.params", f"names that start with the method's prefix {prefix!r}", p.name)
+        if p.group not in ("", method.name):
+            raise InputError(f"method.params.{p.name}.group", f"empty or the method's name {method.name!r}", p.group)
+        if p.kind in ("choice", "bool") and not p.structural:
+            raise InputError(f"method.params.{p.name}.structural", "True for a choice or a bool (it selects the "
+                             "compiled step's shape)", p.structural)
+        try:
+            p.check(p.default)
+        except InputError as err:
+            raise InputError(f"method.params.{p.name}.default", err.allowed, p.default) from None
+        own.append(dataclasses.replace(p, group=method.name))
+    names = [p.name for p in own]
+    if len(set(names)) != len(names):
+        raise InputError("method.params", "distinct names", names)
+    numeric = {input_name(n) for n, q in {**PARAMETERS, **{p.name: p for p in own}}.items()
+               if not q.structural and q.kind in ("float", "int")}
+    for attr in ("inputs", "wall_inputs"):
+        for k in getattr(method, attr):
+            if k not in numeric:
+                raise InputError(f"method.{attr}", "names of numeric table parameters (see `mmg-casadi params`; "
+                                 "angles without _deg)", k)
+    for attr in ("turn_limit", "lookout"):
+        value = getattr(method, attr)
+        if value is not None and value not in method.step_inputs:
+            raise InputError(f"method.{attr}", "None or one of the method's inputs "
+                             f"({', '.join(method.step_inputs)})", value)
+    return dataclasses.replace(method, params=tuple(own))
+
+
+_FORGET: list[Callable] = []
+"""Callables that drop in-process caches keyed by method names (the compiled steps of
+:mod:`mmg_casadi.closed_loop`), called when a method leaves the registry."""
+
+
+def forget_on_unregister(*fns: Callable) -> None:
+    """Have :func:`unregister` call ``fns`` (e.g. ``functools.lru_cache`` ``cache_clear`` of caches keyed by
+    layouts), so a name registered again with another builder never meets a step built for the old one.
+
+    Parameters
+    ----------
+    *fns : callable
+        Functions of no argument.
+    """
+    _FORGET.extend(fns)
+
+
+def register(method: Method) -> Method:
+    """Add ``method`` to :data:`METHODS` under a new name, with its own parameters in the parameter table.
+
+    A user's method is its builder, its :class:`Method` and this one call; the closed loop, the scenario files,
+    the studies on both backends, the tuners and the CLI then accept its name (from a plugin module,
+    :mod:`mmg_casadi.guidance.plugins`). Nothing is registered when the method is refused.
 
     Parameters
     ----------
     method : Method
-        The method to add.
+        The method to add: a name not yet registered (a clash is refused), parameters named with its prefix and
+        not yet in the table.
 
     Returns
     -------
     Method
-        ``method``.
+        The registered entry (``method`` with its parameters' ``group`` set to its name).
+
+    Examples
+    --------
+    >>> m = register(Method("hold-left", None, (), "doctest", params=(
+    ...     Param("hold_left_gain", 1.0, 0.0, None, "", "a gain", "doctest"),)))
+    >>> PARAMETERS["hold_left_gain"].group, m.step_inputs
+    ('hold-left', ('hold_left_gain',))
+    >>> register(m)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.InputError: method.name: expected a name not yet registered (not one of: ...), got 'hold-left'
+    >>> unregister("hold-left"); "hold_left_gain" in PARAMETERS
+    False
     """
-    if method.name in METHODS:
+    if isinstance(method, Method) and method.name in METHODS:
         raise InputError("method.name", f"a name not yet registered (not one of: {', '.join(METHODS)})",
                          method.name)
-    for attr in ("turn_limit", "lookout"):
-        value = getattr(method, attr)
-        if value is not None and value not in method.inputs:
-            raise InputError(f"method.{attr}", f"None or one of the method's inputs ({', '.join(method.inputs)})",
-                             value)
+    method = _check_method(method)
+    if method.params:
+        add_group(method.name, method.params)
     METHODS[method.name] = method
     return method
 
 
 def unregister(name: str) -> None:
-    """Remove a method added by :func:`register` (the shipped methods stay).
+    """Remove a method added by :func:`register`, and its parameters from the table (the shipped methods stay).
 
     Parameters
     ----------
@@ -404,11 +310,66 @@ def unregister(name: str) -> None:
     """
     if name in NAMES:
         raise InputError("method", f"a method added by register (not one of: {', '.join(NAMES)})", name)
-    METHODS.pop(name, None)
+    if METHODS.pop(name, None) is not None:
+        remove_group(name)
+        for forget in _FORGET:
+            forget()
 
 
-def get(name, field: str = "method") -> Method:
-    """The registered method ``name``, or an :class:`~mmg_casadi.errors.InputError` naming ``field``.
+ENTRY_POINTS = "mmg_casadi.methods"
+"""The entry-point group of installed plugins (:mod:`mmg_casadi.guidance.plugins`)."""
+_INSTALLED_DONE = False
+
+
+def load_installed() -> tuple[str, ...]:
+    """Load every installed plugin (entry points of the group :data:`ENTRY_POINTS`), once per process.
+
+    An entry point names a module that registers its methods when imported, or a :class:`Method` (or a list of
+    them) that is registered here.
+
+    Returns
+    -------
+    tuple of str
+        The methods registered by this call (empty after the first).
+    """
+    global _INSTALLED_DONE
+    if _INSTALLED_DONE:
+        return ()
+    _INSTALLED_DONE = True
+    before = tuple(METHODS)
+    for ep in importlib.metadata.entry_points(group=ENTRY_POINTS):
+        field = f"entry point {ep.name} ({ep.value})"
+        try:
+            obj = ep.load()
+            for m in [obj] if isinstance(obj, Method) else list(obj) if isinstance(obj, (list, tuple)) else []:
+                register(m)
+        except InputError as err:
+            raise InputError(f"{field}: {err.field}", err.allowed, err.got) from None
+        except Exception as err:  # noqa: BLE001 - an installed plugin's own failure, on one line
+            raise InputError(field, f"a module that registers methods, or a Method ({type(err).__name__}: {err})",
+                             ep.value) from None
+    return tuple(n for n in METHODS if n not in before)
+
+
+def names() -> tuple[str, ...]:
+    """The names of every registered method, after loading the installed plugins once (:func:`load_installed`).
+
+    Returns
+    -------
+    tuple of str
+        The shipped methods, then the registered ones, in registration order.
+
+    Examples
+    --------
+    >>> names()[:2]
+    ('inverse-square', 'sink-vortex')
+    """
+    load_installed()
+    return tuple(METHODS)
+
+
+def get(name, field: str = "method", cls=InputError) -> Method:
+    """The registered method ``name``, or ``cls`` (an :class:`~mmg_casadi.errors.InputError`) naming ``field``.
 
     Parameters
     ----------
@@ -416,6 +377,8 @@ def get(name, field: str = "method") -> Method:
         Name of the method.
     field : str, default 'method'
         Name of the input field, used in the error message.
+    cls : type, default InputError
+        Error class for an unknown name (e.g. :class:`~mmg_casadi.errors.ScenarioError` in a file reader).
 
     Returns
     -------
@@ -431,8 +394,8 @@ def get(name, field: str = "method") -> Method:
     ...
     mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, velocity-obstacle-speed, none, colregs-vortex, got 'vortex'
     """
-    if not isinstance(name, str) or name not in METHODS:
-        raise InputError(field, f"one of: {', '.join(METHODS)}", name)
+    if not isinstance(name, str) or name not in names():
+        raise cls(field, f"one of: {', '.join(METHODS)}", name)
     return METHODS[name]
 
 
@@ -456,7 +419,7 @@ def parse_list(value, field: str = "methods") -> tuple[str, ...]:
     >>> parse_list("none, inverse-square,none")
     ('none', 'inverse-square')
     """
-    allowed = f"a non-empty list of: {', '.join(NAMES)}"
+    allowed = f"a non-empty list of: {', '.join(names())}"
     if isinstance(value, str):
         value = [m.strip() for m in value.split(",") if m.strip()]
     try:
@@ -469,3 +432,120 @@ def parse_list(value, field: str = "methods") -> tuple[str, ...]:
         if not isinstance(m, str) or m not in METHODS:
             raise InputError(field, allowed, m)
     return tuple(dict.fromkeys(items))
+
+
+# ------------------------------------------------------------------------ parameters a run may set
+
+_RUN: contextvars.ContextVar = contextvars.ContextVar("mmg_casadi_run_methods", default=None)
+"""The methods of the outermost run being set up (:func:`run_of`); nested runs are not checked again."""
+
+
+def owners(name: str) -> tuple[str, ...]:
+    """The registered methods whose builders read parameter ``name``; empty for a parameter every run reads.
+
+    Parameters
+    ----------
+    name : str
+        A parameter of the table.
+
+    Returns
+    -------
+    tuple of str
+        Method names in registry order (empty for a parameter of :data:`~mmg_casadi.params.CLOSED_LOOP_GROUPS`).
+
+    Examples
+    --------
+    >>> owners("cv_r_look"), owners("r_safe")
+    (('colregs-vortex',), ())
+    >>> owners("vo_candidates")
+    ('velocity-obstacle', 'velocity-obstacle-speed', 'colregs-vortex')
+    """
+    group = PARAMETERS[name].group
+    if group in CLOSED_LOOP_GROUPS:
+        return ()
+    return tuple(n for n, m in METHODS.items() if m.owns(group))
+
+
+def check_used(params, methods_used, *, prefix: str = "") -> None:
+    """Refuse a parameter of ``params`` that only methods outside ``methods_used`` read.
+
+    A method's parameter (one of the groups it lists, or its own) does nothing in a run none of whose ships uses
+    the method, so setting it is refused like any option that does not apply.
+
+    Parameters
+    ----------
+    params : dict or None
+        Parameter overrides by table name (already checked against the table).
+    methods_used : iterable of str
+        The methods of every ship of the run (own ships and targets; ``"none"`` may be among them).
+    prefix : str, optional
+        Prepended to the parameter name in the error (e.g. ``"params."``).
+
+    Examples
+    --------
+    >>> check_used({"cv_r_look": 3.0, "r_safe": 10.0}, ["colregs-vortex"])
+    >>> check_used({"cv_r_look": 3.0}, ["modified-vortex", "none"])
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.ParameterError: cv_r_look: expected a parameter of a method the run uses (modified-vortex, none; cv_r_look is read by colregs-vortex only), got 3.0
+    """
+    used = tuple(dict.fromkeys(methods_used))
+    for k, v in (params or {}).items():
+        if k not in PARAMETERS:
+            continue  # the table's check names unknown parameters
+        by = owners(k)
+        if by and not set(by) & set(used):
+            raise ParameterError(f"{prefix}{k}", f"a parameter of a method the run uses ({', '.join(used)}; {k} is "
+                                 f"read by {', '.join(by)} only)", v)
+
+
+def check_run(methods_used, params, *, prefix: str = "") -> None:
+    """:func:`check_used` for a run that checks its arguments first (a study), unless it is part of an outer run
+    (:func:`run_of`), which checked them against all of its methods.
+
+    Parameters
+    ----------
+    methods_used : iterable of str
+        Every method the run's ships use.
+    params : dict or None
+        The overrides given to the run.
+    prefix : str, optional
+        Prepended to the parameter name in an error.
+    """
+    if _RUN.get() is None:
+        check_used(params, methods_used, prefix=prefix)
+
+
+@contextlib.contextmanager
+def run_of(methods_used, params, *, prefix: str = ""):
+    """The context of a run whose ships use ``methods_used``, given the overrides ``params``.
+
+    The outermost run (a command, a study, a scenario run from Python) checks the overrides with
+    :func:`check_used`; the runs it is made of (a study's scenarios, each with one of its methods) are not checked
+    again, so a study of two methods may set a parameter of one of them.
+
+    Parameters
+    ----------
+    methods_used : iterable of str
+        Every method the run's ships use.
+    params : dict or None
+        The overrides given to the run.
+    prefix : str, optional
+        Prepended to the parameter name in an error.
+
+    Yields
+    ------
+    tuple of str
+        The methods of the outermost run.
+    """
+    outer = _RUN.get()
+    if outer is not None:
+        yield outer
+        return
+    used = tuple(dict.fromkeys(methods_used))
+    check_used(params, used, prefix=prefix)
+    token = _RUN.set(used)
+    try:
+        yield used
+    finally:
+        _RUN.reset(token)

@@ -21,8 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mmg_casadi.compiled import NOTICES
 from mmg_casadi.closed_loop.simulation import compiled_step, load_if_cached
 from mmg_casadi.errors import InputError, RunError
+from mmg_casadi.guidance.plugins import ensure
 from mmg_casadi.limits import MAX_WORKERS_PER_CORE, max_workers
 from mmg_casadi.montecarlo.disturbance_sampling import DisturbanceRanges
 from mmg_casadi.montecarlo.execution import DEFAULT_CHUNK, _non_default, run_batch
@@ -59,6 +61,10 @@ class BatchTask:
         Steps per ``mapaccum`` chunk.
     disturbance : DisturbanceRanges or None, optional
         Ranges of the per-run disturbance (``None``: undisturbed).
+    plugins : tuple of PluginSource, optional
+        The plugins of the process that planned the batch (:func:`mmg_casadi.guidance.plugins.sources`): a worker
+        that does not have their methods loads them before it runs the batch
+        (:func:`~mmg_casadi.guidance.plugins.ensure`; a Ray worker is another process, possibly on another machine).
     """
 
     environment: int
@@ -68,8 +74,10 @@ class BatchTask:
     params: tuple = ()
     chunk: int = DEFAULT_CHUNK
     disturbance: DisturbanceRanges | None = None
+    plugins: tuple = ()
 
     def __call__(self) -> list[dict]:
+        ensure(self.plugins)
         return run_batch(self.environment, self.method, list(self.runs), self.base_seed,
                          params=dict(self.params), chunk=self.chunk, disturbance=self.disturbance)
 
@@ -80,7 +88,7 @@ def _run_task(task: BatchTask) -> list[dict]:
 
 def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int = 0, params: dict | None = None,
                  batch_size: int = DEFAULT_BATCH, chunk: int = DEFAULT_CHUNK,
-                 disturbance: DisturbanceRanges | None = None) -> list[BatchTask]:
+                 disturbance: DisturbanceRanges | None = None, plugins=()) -> list[BatchTask]:
     """Batches of the runs ``0..runs-1`` of every (environment, method) whose key is not in ``done``.
 
     Batches are interleaved over the cells (first batch of every cell, then the second, ...), so the
@@ -106,6 +114,8 @@ def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int =
         Steps per ``mapaccum`` chunk.
     disturbance : DisturbanceRanges or None, optional
         Ranges of the per-run disturbance (``None``: undisturbed).
+    plugins : tuple of PluginSource, optional
+        Plugins every batch carries to its worker (:attr:`BatchTask.plugins`).
 
     Returns
     -------
@@ -123,7 +133,8 @@ def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int =
     for env in envs:
         for m in methods:
             todo = [r for r in range(runs) if (env, m, r) not in done]
-            cells.append([BatchTask(env, m, tuple(todo[i:i + batch_size]), base_seed, items, chunk, disturbance)
+            cells.append([BatchTask(env, m, tuple(todo[i:i + batch_size]), base_seed, items, chunk, disturbance,
+                                    tuple(plugins))
                           for i in range(0, len(todo), batch_size)])
     tasks = []
     for k in range(max((len(c) for c in cells), default=0)):
@@ -132,6 +143,7 @@ def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int =
 
 
 def _compile_item(layout) -> float:
+    NOTICES["stream"] = None  # a forked compiler process: prepare_layouts reports for it
     t0 = time.perf_counter()
     compiled_step(layout)
     return time.perf_counter() - t0

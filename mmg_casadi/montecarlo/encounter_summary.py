@@ -2,8 +2,11 @@
 role and by rule with Wilson intervals, and paired comparisons of methods encounter by encounter.
 
 Each run stores its own ship's encounters with a risk of collision in one text cell (:func:`format_verdicts`),
-e.g. ``2:give-way:0.731:8=1/16=0/15=1;4:stand-on:1:17a_i=1/8=1``: per encounter the other ship's index, the own
-ship's role at the onset of risk, the graded score and each applicable rule's verdict (1 kept, 0 not).
+e.g. ``2:give-way:0.731:8=1/16=0/15=1;4:stand-on:1:17a_i=1/8=1:e``: per encounter the other ship's index, the own
+ship's role at the onset of risk, the graded score, each applicable rule's verdict (1 kept, 0 not) and, as a fifth
+field ``e``, whether an excuse by a give-way duty to another ship changed a verdict (``excuse_changed`` of
+:class:`~mmg_casadi.colregs.scorer.Encounter`). A study keeps one such cell per scoring profile
+(``colregs_verdicts_<profile>``, :data:`~mmg_casadi.montecarlo.execution.PROFILE_COLUMNS`).
 
 :func:`summarize_encounters` reduces the cells to one row per (environment, method, group) where the group is
 ``all``, a role (``head-on``, ``give-way``, ``stand-on``, ``overtaking``, ``overtaken``) or a rule
@@ -11,7 +14,9 @@ ship's role at the onset of risk, the graded score and each applicable rule's ve
 the mean graded score. For a rule, ``n`` counts the encounters in which the rule applies. Cells whose runs sailed
 a narrow channel also get the group ``rule 9``: per run the own ship's Rule 9(a) share (``colregs_rule9``,
 :mod:`mmg_casadi.colregs.narrow_channel`), ``n`` the runs in a channel, kept those at
-:data:`~mmg_casadi.colregs.narrow_channel.KEPT_SHARE` or more, the score the mean share.
+:data:`~mmg_casadi.colregs.narrow_channel.KEPT_SHARE` or more, the score the mean share. ``excused`` counts the
+group's encounters whose verdict an excuse changed. :func:`summarize_profiles` and :func:`compare_profiles` do the
+same for every scoring profile's column, with a ``profile`` column.
 
 :func:`compare_encounters` pairs two methods' encounters of the same run with the same other ship (the i-th risky
 encounter with ship j in run r of one method with the i-th of the other) and compares their compliance with the
@@ -36,11 +41,11 @@ from mmg_casadi.montecarlo.stats import paired_comparison, wilson
 GROUPS: tuple[str, ...] = ("all", *ROLES, *(f"rule {r}" for r in RULES))
 """Groups of :func:`summarize_encounters`, in order."""
 
-ENCOUNTER_COLUMNS: tuple[str, ...] = ("environment", "method", "group", "n", "kept", "rate", "ci_low", "ci_high",
-                                      "score_mean")
+ENCOUNTER_COLUMNS: tuple[str, ...] = ("profile", "environment", "method", "group", "n", "kept", "rate", "ci_low",
+                                      "ci_high", "score_mean", "excused")
 """Columns of ``colregs.csv`` (:func:`write_csv`)."""
 
-PAIR_COLUMNS: tuple[str, ...] = ("environment", "method_a", "method_b", "pairs", "rate_a", "rate_b", "both",
+PAIR_COLUMNS: tuple[str, ...] = ("profile", "environment", "method_a", "method_b", "pairs", "rate_a", "rate_b", "both",
                                  "a_only", "b_only", "neither", "difference", "ci_low", "ci_high", "p_value",
                                  "unpaired_a", "unpaired_b")
 """Columns of ``colregs_comparisons.csv`` (:func:`write_csv`)."""
@@ -60,12 +65,15 @@ class Verdict:
         Graded score in [0, 1].
     rules : dict
         ``{rule: kept}`` for the applicable rules (keys of :data:`~mmg_casadi.colregs.verdict.RULES`).
+    excused : bool
+        Whether an excuse by a give-way duty to another ship changed a verdict.
     """
 
     other: int
     role: str
     score: float
     rules: dict
+    excused: bool = False
 
     @property
     def compliant(self) -> bool:
@@ -86,7 +94,8 @@ def format_verdicts(encounters, ships=None) -> str:
     Returns
     -------
     str
-        ``other:role:score:rule=0|1/...`` per encounter, joined by ``;`` (``""`` without any).
+        ``other:role:score:rule=0|1/...`` per encounter (``:e`` appended where an excuse changed a verdict), joined
+        by ``;`` (``""`` without any).
 
     Examples
     --------
@@ -101,7 +110,8 @@ def format_verdicts(encounters, ships=None) -> str:
     for e in encounters:
         other = e.other if ships is None else int(ships[e.other])
         rules = "/".join(f"{r}={int(v.verdict)}" for r, v in e.rules.items())
-        tokens.append(f"{other}:{e.role}:{float(e.score):.6g}:{rules}")
+        excused = ":e" if getattr(e, "excuse_changed", False) else ""
+        tokens.append(f"{other}:{e.role}:{float(e.score):.6g}:{rules}{excused}")
     return ";".join(tokens)
 
 
@@ -122,8 +132,8 @@ def parse_verdicts(text, field: str = "colregs_verdicts") -> list[Verdict]:
 
     Examples
     --------
-    >>> [v.compliant for v in parse_verdicts("3:give-way:0.73:8=1/16=0;4:stand-on:1:17a_i=1")]
-    [False, True]
+    >>> [(v.compliant, v.excused) for v in parse_verdicts("3:give-way:0.73:8=1/16=0;4:stand-on:1:17a_i=1:e")]
+    [(False, False), (True, True)]
     >>> parse_verdicts("3:sideways:1:8=1")
     Traceback (most recent call last):
     ...
@@ -134,10 +144,12 @@ def parse_verdicts(text, field: str = "colregs_verdicts") -> list[Verdict]:
     out = []
     for token in str(text).split(";"):
         try:
-            other, role, score, rules = token.split(":")
+            other, role, score, rules, *flag = token.split(":")
+            if flag not in ([], ["e"]):
+                raise ValueError
             pairs = [item.split("=") for item in rules.split("/")] if rules else []
             kept = {r: {"1": True, "0": False}[v] for r, v in pairs}
-            verdict = Verdict(int(other), role, float(score), kept)
+            verdict = Verdict(int(other), role, float(score), kept, bool(flag))
             if role not in ROLES or any(r not in RULES for r in kept) or not 0.0 <= verdict.score <= 1.0:
                 raise ValueError
         except (ValueError, KeyError):
@@ -147,10 +159,10 @@ def parse_verdicts(text, field: str = "colregs_verdicts") -> list[Verdict]:
     return out
 
 
-def _rate(n: int, k: int, scores: list) -> dict:
+def _rate(n: int, k: int, scores: list, excused: int = 0) -> dict:
     low, high = wilson(k, n) if n else (math.nan, math.nan)
     return {"n": n, "kept": k, "rate": k / n if n else math.nan, "ci_low": low, "ci_high": high,
-            "score_mean": math.fsum(scores) / len(scores) if scores else math.nan}
+            "score_mean": math.fsum(scores) / len(scores) if scores else math.nan, "excused": excused}
 
 
 def _cells(rows):
@@ -160,14 +172,18 @@ def _cells(rows):
     return cells
 
 
-def summarize_encounters(rows) -> list[dict]:
+def summarize_encounters(rows, column: str = "colregs_verdicts", profile: str = "") -> list[dict]:
     """Per (environment, method) and group (:data:`GROUPS`), the encounters, how many were kept, the rate with a
-    Wilson 95 % interval and the mean graded score (module docstring).
+    Wilson 95 % interval, the mean graded score and how many verdicts an excuse changed (module docstring).
 
     Parameters
     ----------
     rows : iterable of dict
         Rows of ``runs.csv`` (:meth:`~mmg_casadi.montecarlo.results.ResultsTable.read`).
+    column : str, default "colregs_verdicts"
+        The column of verdicts to read.
+    profile : str, default ""
+        The value of the ``profile`` column of every row returned.
 
     Returns
     -------
@@ -188,7 +204,7 @@ def summarize_encounters(rows) -> list[dict]:
     """
     out = []
     for (env, method), group in _cells(rows).items():
-        verdicts = [v for r in group for v in parse_verdicts(r.get("colregs_verdicts"))]
+        verdicts = [v for r in group for v in parse_verdicts(r.get(column), column)]
         for name in GROUPS:
             if name.startswith("rule "):
                 rule = name[5:]
@@ -197,13 +213,38 @@ def summarize_encounters(rows) -> list[dict]:
             else:
                 chosen = [v for v in verdicts if name in ("all", v.role)]
                 k = sum(1 for v in chosen if v.compliant)
-            out.append({"environment": env, "method": method, "group": name,
-                        **_rate(len(chosen), k, [v.score for v in chosen])})
+            out.append({"profile": profile, "environment": env, "method": method, "group": name,
+                        **_rate(len(chosen), k, [v.score for v in chosen], sum(v.excused for v in chosen))})
         shares = [x for x in (_share(r.get("colregs_rule9")) for r in group) if x is not None]
         if shares:  # runs in a narrow channel: Rule 9(a), one verdict per run
-            out.append({"environment": env, "method": method, "group": "rule 9",
+            out.append({"profile": profile, "environment": env, "method": method, "group": "rule 9",
                         **_rate(len(shares), sum(x >= KEPT_SHARE for x in shares), shares)})
     return out
+
+
+def summarize_profiles(rows, columns: dict) -> list[dict]:
+    """:func:`summarize_encounters` of every profile's column, one after the other.
+
+    Parameters
+    ----------
+    rows : iterable of dict
+        Rows of ``runs.csv``.
+    columns : dict
+        ``{profile: column}`` (:data:`~mmg_casadi.montecarlo.execution.PROFILE_COLUMNS`).
+
+    Returns
+    -------
+    list of dict
+        Keys :data:`ENCOUNTER_COLUMNS`, the profiles in the order of ``columns``.
+
+    Examples
+    --------
+    >>> rows = [{"environment": 5, "method": "cv", "run": 0, "a": "1:give-way:0.5:8=1/16=0", "b": "1:give-way:1:8=1"}]
+    >>> [(r["profile"], r["kept"]) for r in summarize_profiles(rows, {"p": "a", "q": "b"}) if r["group"] == "all"]
+    [('p', 0), ('q', 1)]
+    """
+    rows = list(rows)
+    return [r for name, column in columns.items() for r in summarize_encounters(rows, column, name)]
 
 
 def _share(value) -> float | None:
@@ -214,18 +255,18 @@ def _share(value) -> float | None:
     return None if math.isnan(x) else x
 
 
-def _keyed(group) -> dict:
+def _keyed(group, column) -> dict:
     """``{(run, other, occurrence): compliant}`` of one cell's runs."""
     out = {}
     for row in group:
         seen: dict[int, int] = {}
-        for v in parse_verdicts(row.get("colregs_verdicts")):
+        for v in parse_verdicts(row.get(column), column):
             i = seen[v.other] = seen.get(v.other, -1) + 1
             out[(int(row["run"]), v.other, i)] = v.compliant
     return out
 
 
-def compare_encounters(rows, methods=None) -> list[dict]:
+def compare_encounters(rows, methods=None, column: str = "colregs_verdicts", profile: str = "") -> list[dict]:
     """Paired per-encounter compliance of every two methods per environment (module docstring).
 
     Parameters
@@ -234,6 +275,10 @@ def compare_encounters(rows, methods=None) -> list[dict]:
         Rows of ``runs.csv``.
     methods : sequence of str, optional
         Methods in the order to pair them (default: order of first appearance).
+    column : str, default "colregs_verdicts"
+        The column of verdicts to read.
+    profile : str, default ""
+        The value of the ``profile`` column of every row returned.
 
     Returns
     -------
@@ -256,11 +301,11 @@ def compare_encounters(rows, methods=None) -> list[dict]:
     out = []
     for env in sorted({e for e, _ in cells}):
         present = [m for m in order if (env, m) in cells]
-        keyed = {m: _keyed(cells[(env, m)]) for m in present}
+        keyed = {m: _keyed(cells[(env, m)], column) for m in present}
         for i, a in enumerate(present):
             for b in present[i + 1:]:
                 common = sorted(keyed[a].keys() & keyed[b].keys())
-                row = {"environment": env, "method_a": a, "method_b": b, "pairs": len(common),
+                row = {"profile": profile, "environment": env, "method_a": a, "method_b": b, "pairs": len(common),
                        "unpaired_a": len(keyed[a]) - len(common), "unpaired_b": len(keyed[b]) - len(common)}
                 if common:
                     c = paired_comparison([keyed[a][k] for k in common], [keyed[b][k] for k in common])
@@ -273,6 +318,27 @@ def compare_encounters(rows, methods=None) -> list[dict]:
                     row.update({k: 0 for k in ("both", "a_only", "b_only", "neither")})
                 out.append(row)
     return out
+
+
+def compare_profiles(rows, columns: dict, methods=None) -> list[dict]:
+    """:func:`compare_encounters` of every profile's column, one after the other.
+
+    Parameters
+    ----------
+    rows : iterable of dict
+        Rows of ``runs.csv``.
+    columns : dict
+        ``{profile: column}``.
+    methods : sequence of str, optional
+        Methods in the order to pair them.
+
+    Returns
+    -------
+    list of dict
+        Keys :data:`PAIR_COLUMNS`, the profiles in the order of ``columns``.
+    """
+    rows = list(rows)
+    return [r for name, column in columns.items() for r in compare_encounters(rows, methods, column, name)]
 
 
 def write_csv(table, path, columns) -> Path:
@@ -309,14 +375,14 @@ def _pct(r) -> str:
 
 def to_markdown(summary, comparisons) -> str:
     """Markdown tables: per-encounter compliance by role and by rule (``rate [95 % CI] (n)``) and the paired
-    comparisons.
+    comparisons, per scoring profile.
 
     Parameters
     ----------
     summary : list of dict
-        :func:`summarize_encounters`.
+        :func:`summarize_encounters` or :func:`summarize_profiles`.
     comparisons : list of dict
-        :func:`compare_encounters`.
+        :func:`compare_encounters` or :func:`compare_profiles`.
 
     Returns
     -------
@@ -326,33 +392,35 @@ def to_markdown(summary, comparisons) -> str:
     Examples
     --------
     >>> rows = [{"environment": 5, "method": "cv", "run": 0, "colregs_verdicts": "1:give-way:0.5:8=1/16=0"}]
-    >>> print(to_markdown(summarize_encounters(rows), []).splitlines()[2])
-    | 5 | cv | 0.0 [0.0, 79.3] (1) | 0.500 | n/a (0) | 0.0 [0.0, 79.3] (1) | n/a (0) | n/a (0) | n/a (0) |
+    >>> print(to_markdown(summarize_encounters(rows, profile="published"), []).splitlines()[2])
+    | published | 5 | cv | 0.0 [0.0, 79.3] (1) | 0.500 | 0 | n/a (0) | 0.0 [0.0, 79.3] (1) | n/a (0) | n/a (0) | n/a (0) |
     """
     by_cell: dict[tuple, dict] = {}
     for r in summary:
-        by_cell.setdefault((r["environment"], r["method"]), {})[r["group"]] = r
-    roles = ["Env", "Method", "All [%] (n)", "Mean score", *(f"{g} [%] (n)" for g in ROLES)]
-    lines = ["| " + " | ".join(roles) + " |", "|---:|:---|" + ":---|" * (len(roles) - 2)]
-    for (env, method), g in by_cell.items():
+        by_cell.setdefault((r["profile"], r["environment"], r["method"]), {})[r["group"]] = r
+    roles = ["Profile", "Env", "Method", "All [%] (n)", "Mean score", "Excused", *(f"{g} [%] (n)" for g in ROLES)]
+    lines = ["| " + " | ".join(roles) + " |", "|:---|---:|:---|" + ":---|" * (len(roles) - 3)]
+    for (profile, env, method), g in by_cell.items():
         score = g["all"]["score_mean"]
-        lines.append("| " + " | ".join([str(env), method, _pct(g["all"]), "n/a" if math.isnan(score) else
-                                        f"{score:.3f}", *(_pct(g[x]) for x in ROLES)]) + " |")
+        lines.append("| " + " | ".join([profile, str(env), method, _pct(g["all"]), "n/a" if math.isnan(score) else
+                                        f"{score:.3f}", str(g["all"]["excused"]), *(_pct(g[x]) for x in ROLES)])
+                     + " |")
     shown = list(RULES) + (["9"] if any("rule 9" in g for g in by_cell.values()) else [])
-    rules = ["Env", "Method", *(f"Rule {r} kept [%] (applied)" for r in shown)]
-    lines += ["", "| " + " | ".join(rules) + " |", "|---:|:---|" + ":---|" * len(shown)]
-    for (env, method), g in by_cell.items():
-        lines.append("| " + " | ".join([str(env), method, *(_pct(g[f"rule {r}"]) if f"rule {r}" in g else
-                                                            "n/a (0)" for r in shown)]) + " |")
+    rules = ["Profile", "Env", "Method", *(f"Rule {r} kept [%] (applied)" for r in shown)]
+    lines += ["", "| " + " | ".join(rules) + " |", "|:---|---:|:---|" + ":---|" * len(shown)]
+    for (profile, env, method), g in by_cell.items():
+        lines.append("| " + " | ".join([profile, str(env), method, *(_pct(g[f"rule {r}"]) if f"rule {r}" in g else
+                                                                     "n/a (0)" for r in shown)]) + " |")
     if comparisons:
-        head = ["Env", "A", "B", "Paired encounters", "A kept [%]", "B kept [%]", "A only", "B only",
+        head = ["Profile", "Env", "A", "B", "Paired encounters", "A kept [%]", "B kept [%]", "A only", "B only",
                 "A − B [pp] (95 % CI)", "McNemar p", "Unpaired A / B"]
-        lines += ["", "| " + " | ".join(head) + " |", "|---:|:---|:---|---:|---:|---:|---:|---:|:---|---:|---:|"]
+        lines += ["", "| " + " | ".join(head) + " |",
+                  "|:---|---:|:---|:---|---:|---:|---:|---:|---:|:---|---:|---:|"]
         for c in comparisons:
             if not c["pairs"]:
-                cells = [str(c["environment"]), c["method_a"], c["method_b"], "0", *["n/a"] * 6]
+                cells = [c["profile"], str(c["environment"]), c["method_a"], c["method_b"], "0", *["n/a"] * 6]
             else:
-                cells = [str(c["environment"]), c["method_a"], c["method_b"], str(c["pairs"]),
+                cells = [c["profile"], str(c["environment"]), c["method_a"], c["method_b"], str(c["pairs"]),
                          f"{100 * c['rate_a']:.1f}", f"{100 * c['rate_b']:.1f}", str(c["a_only"]), str(c["b_only"]),
                          f"{100 * c['difference']:+.1f} [{100 * c['ci_low']:+.1f}, {100 * c['ci_high']:+.1f}]",
                          f"{c['p_value']:.3g}"]

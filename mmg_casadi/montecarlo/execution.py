@@ -35,6 +35,10 @@ Outcome of a run (own ship = agent 0, judged from the final state):
     them it kept every applicable rule in, the mean of their graded scores (``nan`` without one), the run-level
     flag (every risky encounter kept; empty without one) and each encounter's role, score and rule verdicts
     (:func:`format_verdicts`); see :func:`own_ship_encounters`.
+``colregs_verdicts_published``, ``colregs_verdicts_iitm_lab``, ``colregs_verdicts_ntnu_2023``
+    the same encounters' verdicts under each scoring profile (:data:`PROFILE_COLUMNS`): the headline
+    (``colregs_profile``) always, every profile with ``colregs_all_profiles``, so that a study reports them side by
+    side; empty for a profile not scored.
 ``colregs_rule9``
     the own ship's COLREG Rule 9(a) score in a narrow channel (:func:`mmg_casadi.colregs.narrow_channel.rule9`
     on the same history): the share of her time in a narrow channel spent on the starboard side of its centre
@@ -67,8 +71,9 @@ from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.closed_loop.problem import ClosedLoopModel, build_problem
 from mmg_casadi.colregs.narrow_channel import rule9
-from mmg_casadi.colregs.profiles import scoring_profile
-from mmg_casadi.colregs.scorer import score_encounters
+from mmg_casadi.colregs.profiles import SCORING_PROFILES, scoring_profile
+from mmg_casadi.colregs.scorer import prepare, score_prepared
+from mmg_casadi.guidance.methods import forget_on_unregister
 from mmg_casadi.montecarlo.encounter_summary import format_verdicts
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
 from mmg_casadi.montecarlo.failures import failure_mechanism, turn_time_90, unavoidable_at_start
@@ -225,15 +230,45 @@ def time_guidance(layout: Layout, X: np.ndarray, P: np.ndarray, *, min_time: flo
 HISTORY_EVERY = 2
 """The batch rollout keeps every 2nd guidance step (0.5 L/U) of positions and headings for the COLREG scoring."""
 
+PROFILE_COLUMNS: dict[str, str] = {name: f"colregs_verdicts_{name.replace('-', '_')}" for name in SCORING_PROFILES}
+"""Column of ``runs.csv`` holding each scoring profile's ``colregs_verdicts``."""
 
-def own_ship_encounters(t, states, profile=None) -> dict:
+
+def profile_columns(params: dict) -> dict[str, str]:
+    """The :data:`PROFILE_COLUMNS` a study with the resolved ``params`` fills: its ``colregs_profile`` first, then,
+    with ``colregs_all_profiles``, the others in registry order.
+
+    Parameters
+    ----------
+    params : dict
+        The study's resolved parameters.
+
+    Returns
+    -------
+    dict
+        ``{profile: column}``.
+
+    Examples
+    --------
+    >>> list(profile_columns({"colregs_profile": "iitm-lab", "colregs_all_profiles": True}))
+    ['iitm-lab', 'published', 'ntnu-2023']
+    >>> list(profile_columns({"colregs_profile": "iitm-lab", "colregs_all_profiles": False}))
+    ['iitm-lab']
+    """
+    headline = params["colregs_profile"]
+    others = {n: c for n, c in PROFILE_COLUMNS.items() if n != headline} if params["colregs_all_profiles"] else {}
+    return {headline: PROFILE_COLUMNS[headline], **others}
+
+
+def own_ship_encounters(t, states, profile=None, *, alternatives=()) -> dict:
     """``colregs_risky``, ``colregs_lawful``, ``colregs_score``, ``colregs_compliant`` and ``colregs_verdicts`` of
     one run: the own ship's (ship 0) encounters with a risk of collision, judged by
     :func:`~mmg_casadi.colregs.scorer.score_encounters`; an encounter that ends before its CPA is unfinished and not
     counted.
 
-    Only the ships that come within the profile's risk range ``r_risk`` of the own ship while both sail are
-    scored (a ship farther away has no risk of collision and no duty; the verdicts are the same).
+    Only the ships that come within the risk gate's reach of the own ship while both sail are scored: the range
+    ``r_risk``, or with a time horizon ``d_risk`` plus the largest closing speed of the history over ``t_risk``
+    (a ship farther away has no risk of collision and no duty; the verdicts are the same).
 
     Parameters
     ----------
@@ -243,14 +278,18 @@ def own_ship_encounters(t, states, profile=None) -> dict:
         ``x``, ``y`` (L), ``psi`` (rad) and ``status`` of every ship (ship 0 the own ship), as kept by
         :func:`mmg_casadi.closed_loop.simulation.simulate_batch_history`.
     profile : ScoringProfile or str, optional
-        Scoring profile or its name (default ``"iitm-lab"``).
+        Scoring profile or its name (default ``"published"``).
+    alternatives : sequence of str, optional
+        Names of profiles (:data:`~mmg_casadi.colregs.profiles.SCORING_PROFILES`) whose verdicts are also given,
+        each as the column :data:`PROFILE_COLUMNS` names.
 
     Returns
     -------
     dict
         ``colregs_risky`` (int), ``colregs_lawful`` (int), ``colregs_score`` (float, ``nan`` if no risky one),
         ``colregs_compliant`` (every risky encounter kept; ``None`` without one) and ``colregs_verdicts`` (str,
-        :func:`~mmg_casadi.montecarlo.encounter_summary.format_verdicts` with the ships' scenario indices).
+        :func:`~mmg_casadi.montecarlo.encounter_summary.format_verdicts` with the ships' scenario indices); and the
+        verdicts of each of ``alternatives`` under its :data:`PROFILE_COLUMNS` name.
 
     Examples
     --------
@@ -265,22 +304,30 @@ def own_ship_encounters(t, states, profile=None) -> dict:
     >>> r["colregs_verdicts"].split(":")[:2]
     ['1', 'head-on']
     """
-    profile = scoring_profile(profile)
     t = np.asarray(t, float)
     states = np.asarray(states, float)
     mask = sailing_mask(states[:, :, 3])
     dist = np.linalg.norm(states[:, 1:, :2] - states[:, :1, :2], axis=2)
-    near = np.any((dist <= profile.r_risk) & mask[:, :1] & mask[:, 1:], axis=0)
-    ships = [0, *(1 + np.flatnonzero(near))]
-    risky = []
+    both = mask[:, :1] & mask[:, 1:]
+    speed = (np.max(np.linalg.norm(np.diff(states[:, :, :2], axis=0), axis=2) / np.diff(t)[:, None])
+             if t.size > 1 else 0.0)
+    profiles = list(dict.fromkeys((scoring_profile(profile), *(scoring_profile(n) for n in alternatives))))
+    # a ship that never comes within a profile's risk gate's reach has no risk of collision and no duty under it
+    reach = max(min(p.r_risk, p.d_risk + 2.0 * speed * p.t_risk) if math.isfinite(p.t_risk) else p.r_risk
+                for p in profiles)
+    ships = [0, *(1 + np.flatnonzero(np.any((dist <= reach) & both, axis=0)))]
+    scored = {p: [] for p in profiles}  # profile -> its risky encounters
     if len(ships) > 1 and t.size > 1:  # one sample has no velocity, hence no risk of collision
-        risky = [e for e in score_encounters(t, states[:, ships, :2], states[:, ships, 2], active=mask[:, ships],
-                                             profile=profile, own=0) if e.judged]
+        prep = prepare(t, states[:, ships, :2], states[:, ships, 2], active=mask[:, ships], own=0)
+        for p in profiles:
+            scored[p] = [e for e in score_prepared(prep, p, applicable_only=True) if e.judged]
+    risky = scored[scoring_profile(profile)]
     lawful = sum(1 for e in risky if e.compliant)
     return {"colregs_risky": len(risky), "colregs_lawful": lawful,
             "colregs_score": float(np.mean([e.score for e in risky])) if risky else math.nan,
             "colregs_compliant": lawful == len(risky) if risky else None,
-            "colregs_verdicts": format_verdicts(risky, ships)}
+            "colregs_verdicts": format_verdicts(risky, ships),
+            **{PROFILE_COLUMNS[n]: format_verdicts(scored[scoring_profile(n)], ships) for n in alternatives}}
 
 
 def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
@@ -331,7 +378,10 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
                              collision_with=own["collision_with"], goals=goals, obstacles=obstacles,
                              positions_at_collision=at, turn_time=turn_time_90(float(P["delta_max_deg"])),
                              near_goal_distance=float(P["near_goal_distance"]), unavoidable=unavoidable)
-    return {"failure_mechanism": mech, **own_ship_encounters(t, states, P["colregs_profile"]),
+    return {"failure_mechanism": mech, **dict.fromkeys(PROFILE_COLUMNS.values(), ""),  # "" for a profile not scored
+            **own_ship_encounters(t, states, P["colregs_profile"],
+                                  alternatives=tuple(SCORING_PROFILES) if P["colregs_all_profiles"] else
+                                  (P["colregs_profile"],)),
             "colregs_rule9": own_ship_rule9(scenario, t, states)}
 
 
@@ -360,7 +410,7 @@ def own_ship_rule9(scenario, t, states) -> float:
 
 
 def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT_CHUNK,
-                  time_guidance_calls: bool = True, explain: bool = True) -> list[dict]:
+                  time_guidance_calls: bool = True, explain: bool = True, histories: dict | None = None) -> list[dict]:
     """Simulate scenarios together and classify each from its final state.
 
     Scenarios with the same :class:`Layout` are rolled out as one batch (one compiled step, ``map`` over the
@@ -380,6 +430,9 @@ def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT
         Measure the compiled guidance call per ship of every batch.
     explain : bool
         Keep a history and add the failure mechanism and the own ship's COLREG compliance.
+    histories : dict, optional
+        With ``explain``, filled with ``{i: (scenario, t, states)}``: the decimated history the row of scenario ``i``
+        was judged from (:func:`mmg_casadi.montecarlo.explain.explain_run`).
 
     Returns
     -------
@@ -405,12 +458,15 @@ def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT
             row["guidance_call_us"] = us
             if explain:
                 row.update(explain_run(scenarios[i], problems[i].model, XF[:, col], *hist.column(col)))
+                if histories is not None:
+                    histories[i] = (scenarios[i], *hist.column(col))
             out[i] = row
     return out  # type: ignore[return-value]
 
 
 def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params: dict | None = None,
-              chunk: int = DEFAULT_CHUNK, disturbance: DisturbanceRanges | None = None) -> list[dict]:
+              chunk: int = DEFAULT_CHUNK, disturbance: DisturbanceRanges | None = None,
+              histories: dict | None = None) -> list[dict]:
     """Simulate runs of one (environment, method) together and return their result rows.
 
     Parameters
@@ -429,6 +485,8 @@ def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params
         Steps per compiled chunk.
     disturbance : DisturbanceRanges, optional
         Ranges of the per-run current and wind (:func:`~mmg_casadi.montecarlo.disturbance_sampling.sample_disturbance`).
+    histories : dict, optional
+        Filled with each run's scenario and history, by position in ``runs`` (:func:`run_scenarios`).
 
     Returns
     -------
@@ -442,7 +500,7 @@ def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params
     env = _run_disturbances(environment, runs, base_seed, params, disturbance)
     scenarios = [sampled_scenario(environment, method, r, base_seed, params=_non_default({**overrides, **d}))
                  for r, d in zip(runs, env)]
-    results = run_scenarios(scenarios, chunk=chunk)
+    results = run_scenarios(scenarios, chunk=chunk, histories=histories)
     rows = []
     for r, res, d in zip(runs, results, env):
         row = {"environment": int(environment), "method": method, "run": r, "seed": int(base_seed), **res, **d}
@@ -457,3 +515,6 @@ def _run_disturbances(environment: int, runs, base_seed: int, params: dict | Non
         return [sample_disturbance(environment, r, base_seed, ranges) for r in runs]
     fixed = resolve(params)
     return [{c: fixed[c] for c in ENV_COLUMNS} for _ in runs]
+
+
+forget_on_unregister(_mapped_guidance.cache_clear)

@@ -54,7 +54,7 @@ import numpy as np
 
 from mmg_casadi.colregs.scorer import SCORER_VERSION
 from mmg_casadi.errors import InputError
-from mmg_casadi.guidance import methods as method_registry
+from mmg_casadi.guidance import methods as method_registry, plugins
 from mmg_casadi.io import StagedFiles, json_safe, write_json, write_text
 from mmg_casadi.limits import check_runs, check_study_size
 from mmg_casadi.montecarlo.batching import (BACKENDS, DEFAULT_BATCH, LocalExecutor, RayExecutor, _check_workers,
@@ -62,7 +62,7 @@ from mmg_casadi.montecarlo.batching import (BACKENDS, DEFAULT_BATCH, LocalExecut
 from mmg_casadi.montecarlo import encounter_summary
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges
 from mmg_casadi.montecarlo.execution import (DEFAULT_CHUNK, _non_default, _run_disturbances, layout_for,
-                                             sampled_scenario)
+                                             profile_columns, sampled_scenario)
 from mmg_casadi.montecarlo.results import ResultsTable, summarize
 from mmg_casadi.montecarlo.sampling import ALL_ENVIRONMENTS, parse_envs
 from mmg_casadi.params import PARAMETERS, diff, resolve
@@ -142,6 +142,7 @@ def check_study_args(*, runs=200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS,
     batch_size = _check_int("batch_size", batch_size, 1)
     chunk = _check_int("chunk", chunk, 1)
     resolved = resolve(params, prefix="params.")
+    method_registry.check_run((*methods, "none"), params)  # targets that hold use "none"
     ranges = DisturbanceRanges(current=current, wind=wind)
     for name, rng in (("current", ranges.current), ("wind", ranges.wind)):
         for key in (f"{name}_speed", f"{name}_direction_deg"):
@@ -242,7 +243,7 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
                            ranges=ranges)  # again, under the lock
     _record_study_params(out, params, ranges)
     tasks = plan_batches(envs, methods, runs, done=done, base_seed=base_seed, params=params,
-                         batch_size=batch_size, chunk=chunk, disturbance=ranges)
+                         batch_size=batch_size, chunk=chunk, disturbance=ranges, plugins=plugins.sources())
     log = sys.stderr if progress else None
 
     own_executor = executor is None
@@ -281,8 +282,8 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
     # scipy.stats (about 0.7 s to import): imported only when a study is written, not by `import mmg_casadi`
     from mmg_casadi.montecarlo.comparisons import compare_methods, to_markdown, write_csv  # scipy.stats: ~1 s
     comparisons = compare_methods(rows, methods)
-    by_encounter = encounter_summary.summarize_encounters(rows)
-    encounter_pairs = encounter_summary.compare_encounters(rows, methods)
+    by_encounter = encounter_summary.summarize_profiles(rows, profile_columns(params))
+    encounter_pairs = encounter_summary.compare_profiles(rows, profile_columns(params), methods)
     from mmg_casadi.montecarlo.plots import plot_statistics  # matplotlib: imported only when a study is written
     # the final files: each written under a temporary name, all renamed at the end with metrics.json last (an
     # interruption leaves the old set or the new, never a part of a file)
@@ -296,7 +297,7 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
                    summary.to_markdown() + "\n\n## Failure mechanisms (own ship; mmg_casadi.montecarlo.failures)\n\n"
                    + summary.failures_markdown() + "\n\n## Paired comparisons (same runs; exact McNemar test)\n\n"
                    + to_markdown(comparisons) + "\n\n## COLREG encounters with a risk of collision (own ship; profile "
-                   + f"{params['colregs_profile']}; mmg_casadi.montecarlo.encounter_summary)\n\n"
+                   + ", ".join(profile_columns(params)) + "; mmg_casadi.montecarlo.encounter_summary)\n\n"
                    + encounter_summary.to_markdown(by_encounter, encounter_pairs) + "\n")
         plot_statistics(summary, st.path(out / "statistics.png"))
         failures = write_failures(rows, out / "failures", params=params, staged=st)

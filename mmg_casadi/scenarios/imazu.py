@@ -39,7 +39,7 @@ from mmg_casadi.colregs.scorer import judged_encounters
 from mmg_casadi.errors import InputError, check_range
 from mmg_casadi.io import save_figure
 from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_goal, draw_path, marine_axes
-from mmg_casadi.guidance.methods import NAMES as METHODS
+from mmg_casadi.guidance import methods as registry
 from mmg_casadi.params import PARAMETERS
 from mmg_casadi.scenarios.run import run_scenario
 from mmg_casadi.scenarios.scenario import scenario_from_dict
@@ -115,8 +115,7 @@ def imazu_case(k: int, *, method: str, targets: str = "hold", t_max: float = T_M
     70.0
     """
     k = _check_case(k)
-    if method not in METHODS:
-        raise InputError("method", f"one of: {', '.join(METHODS)}", method)
+    registry.get(method, "method")
     if targets not in TARGET_MODES:
         raise InputError("targets", "one of: hold, avoid", targets)
     meet = np.array([MEET_DISTANCE, 0.0])
@@ -151,7 +150,7 @@ def stand_on_bound(k: int, *, profile=None, rudder_deg: float = 35.0, step: floa
     k : int
         Problem number, 1 to 22.
     profile : str or ScoringProfile, optional
-        Scoring profile (default ``iitm-lab``, :func:`~mmg_casadi.colregs.profiles.scoring_profile`).
+        Scoring profile (default ``published``, :func:`~mmg_casadi.colregs.profiles.scoring_profile`).
     rudder_deg : float
         Rudder angle of the turn (degrees, (0, 35]).
     step : float
@@ -166,10 +165,10 @@ def stand_on_bound(k: int, *, profile=None, rudder_deg: float = 35.0, step: floa
 
     Examples
     --------
-    Case 10: the second target crosses from port at a fine angle, closing at 0.26 U; when her inaction is
-    apparent (TCPA 4) she is 1.0 L away:
+    Case 10 under the laboratory profile: the second target crosses from port at a fine angle, closing at 0.26 U;
+    when her inaction is apparent (TCPA 4) she is 1.0 L away:
 
-    >>> row = stand_on_bound(10)[1]
+    >>> row = stand_on_bound(10, profile="iitm-lab")[1]
     >>> row["role"], round(row["range_late"], 2), row["safe"]
     ('stand-on', 1.04, False)
     """

@@ -57,7 +57,7 @@ import numpy as np
 
 from mmg_casadi.errors import ScenarioError
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
-from mmg_casadi.guidance.methods import NAMES as METHODS
+from mmg_casadi.guidance import methods as registry
 from mmg_casadi.readers import is_finite, load_json
 from mmg_casadi.scenarios.geodesy import LocalPlane, initial_azimuth
 from mmg_casadi.scenarios.geojson_land import land_polygons, read_geojson
@@ -320,8 +320,7 @@ def traffic_situation_to_scenario(data: dict, *, method: str = DEFAULT_METHOD, t
     (50.0, 10.0, {'id': 2, 'mmsi': 257000123})
     """
     for name, value in (("method", method), ("target_method", target_method)):
-        if value not in METHODS:
-            raise ScenarioError(name, f"one of: {', '.join(METHODS)}", value)
+        registry.get(value, name, ScenarioError)
     if length_scale not in LENGTH_SCALES:
         raise ScenarioError("length_scale", f"one of: {', '.join(LENGTH_SCALES)}", length_scale)
     if not (is_finite(extend_past) and extend_past >= 0):

@@ -30,9 +30,10 @@ SCHEMA_FILE = "metrics.schema.json"
 """File name of the packaged schema in ``mmg_casadi/data/``."""
 
 ENCOUNTER_QUANTITIES = ("t_baseline", "t_baseline_other", "beta_deg", "alpha_deg", "beta_onset_deg",
-                        "alpha_onset_deg", "speed", "speed_other", "t_late", "t_must", "speed_max_before")
-"""Keys of an applicable encounter's ``quantities`` (:class:`~mmg_casadi.colregs.scorer.Encounter`); a
-non-applicable one has ``min_range`` alone."""
+                        "alpha_onset_deg", "speed", "speed_other", "t_late", "t_apparent", "t_must",
+                        "speed_max_before", "own_clearance")
+"""Numeric keys of an applicable encounter's ``quantities`` (:class:`~mmg_casadi.colregs.scorer.Encounter`), besides
+the flag ``head_on_in_doubt``; a non-applicable one has ``min_range`` alone."""
 
 _NUM = {"type": ["number", "null"]}
 _POINT = {"oneOf": [{"type": "null"}, {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2}]}
@@ -123,6 +124,7 @@ def metrics_schema() -> dict:
         "profile": _enum(SCORING_PROFILES),
         "applicable": {"type": "boolean"},
         "unfinished": {"type": "boolean"},
+        "excuse_changed": {"type": "boolean"},
         "encounter": _enum(encounter_types, null=True),
         "role": _enum(ROLES, null=True),
         "onset": {"oneOf": [{"type": "null"}, _obj({"t": _NUM, "range": _NUM, "cpa": _NUM, "tcpa": _NUM})]},
@@ -133,7 +135,9 @@ def metrics_schema() -> dict:
         "conflicting_duties": {"type": "boolean"},
         "conflicts_with": {"type": "array", "items": {"type": "string"}},
         "rules": _obj({r: {"oneOf": [{"type": "null"}, rule]} for r in RULES}),
-        "quantities": {"oneOf": [_obj({"min_range": _NUM}), _obj({q: _NUM for q in ENCOUNTER_QUANTITIES})]},
+        "quantities": {"oneOf": [_obj({"min_range": _NUM}),
+                                 _obj({**{q: _NUM for q in ENCOUNTER_QUANTITIES},
+                                       "head_on_in_doubt": {"type": "boolean"}})]},
     }, description="One encounter of the encounter scorer (mmg_casadi.colregs.scorer.Encounter.to_dict).")
     encounter["allOf"] = [
         {"if": {"properties": {"applicable": {"const": True}}},
