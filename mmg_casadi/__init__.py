@@ -21,9 +21,16 @@ import sys as _sys
 _orig_argv = list(getattr(_sys, "orig_argv", ()))
 if ((getattr(_sys, "argv", None) or [""])[0].endswith("mmg-casadi")
         or ("-m", "mmg_casadi.cli") in zip(_orig_argv, _orig_argv[1:])):
-    # the command line program: a signal that arrives while the package loads (seconds) is acted on by its main()
+    # the command line program: a signal that arrives while the package loads is acted on by its main(); recorded
+    # from here on with the signal module alone, then by mmg_casadi.signals (its imports take tens of ms)
+    import signal as _signal
+    _early: tuple[dict, list] = ({}, [])
+    for _s in (_signal.SIGTERM, _signal.SIGHUP, _signal.SIGINT):
+        if _signal.getsignal(_s) in (_signal.SIG_DFL, _signal.default_int_handler):
+            _early[0][_s] = _signal.getsignal(_s)
+            _signal.signal(_s, lambda signum, _frame: _early[1].append(signum))
     from mmg_casadi.signals import defer_startup_signals as _defer
-    _defer(program=True)
+    _defer(program=True, early=_early)
 
 _PUBLIC = {
     "Layout": ("mmg_casadi.closed_loop.layout", "Layout"),

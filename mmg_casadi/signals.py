@@ -262,7 +262,8 @@ def _ignore_sigint_in_child() -> None:
         pass
 
 
-def defer_startup_signals(signals=(*TERMINATION_SIGNALS, signal.SIGINT), *, program: bool = False) -> None:
+def defer_startup_signals(signals=(*TERMINATION_SIGNALS, signal.SIGINT), *, program: bool = False,
+                          early=None) -> None:
     """Record, instead of acting on, the ``signals`` that arrive while the command line program starts.
 
     Loading the package takes seconds (CasADi, NumPy, SciPy); a SIGTERM then (e.g. the first seconds of a cold
@@ -279,6 +280,10 @@ def defer_startup_signals(signals=(*TERMINATION_SIGNALS, signal.SIGINT), *, prog
     program : bool, optional
         This process is the ``mmg-casadi`` program (:func:`is_program`; the package passes True when it is
         loaded as the program): children it forks ignore SIGINT from their first instruction on.
+    early : tuple of (dict, list), optional
+        ``(previous handlers, signals received)`` of a recorder installed before this module was imported (the
+        package installs one with the ``signal`` module alone, so a Ctrl-C while this module loads is deferred
+        too): its signals are taken over, and those it received come first.
 
     Examples
     --------
@@ -297,11 +302,16 @@ def defer_startup_signals(signals=(*TERMINATION_SIGNALS, signal.SIGINT), *, prog
         # a child forked by the program (a pool worker) ignores Ctrl-C from the first instruction on: the
         # program stops its workers itself (SIGTERM), a worker's KeyboardInterrupt would print a traceback
         os.register_at_fork(after_in_child=_ignore_sigint_in_child)
+    previous, received = early if early is not None else ({}, [])
     for s in signals:
         current = signal.getsignal(s)
-        if current is signal.SIG_DFL or current is signal.default_int_handler:
+        if s in previous:
+            _DEFERRED[s] = previous[s]
+            signal.signal(s, _record)
+        elif current is signal.SIG_DFL or current is signal.default_int_handler:
             _DEFERRED[s] = current
             signal.signal(s, _record)
+    _RECEIVED[:0] = list(received)  # those of the early recorder came first
 
 
 def end_deferred_signals() -> None:

@@ -129,6 +129,17 @@ def test_obstacle_heavy_layouts_run_the_fleet_step_whose_code_does_not_grow_with
     assert abs(sizes[1] - sizes[0]) < 0.01 * sizes[0], sizes  # the same code but for the obstacle count
 
 
+def test_commanded_ships_among_many_obstacles_are_refused_in_one_line():
+    # the fleet step, which obstacle-heavy scenarios run, takes no commands (the Gymnasium env commands ship 0)
+    from mmg_casadi.errors import ScenarioError
+    from mmg_casadi.limits import MAX_UNROLLED_OBSTACLE_PAIRS
+    n = MAX_UNROLLED_OBSTACLE_PAIRS // 2
+    assert build_problem(scenario_from_dict(_obstacle_field(n)), commanded=[0]).layout.commanded == (0,)
+    with pytest.raises(ScenarioError, match=r"obstacles: expected at most 32 obstacles with 2 ships in a scenario "
+                                            r"with commanded ships .* got 33"):
+        build_problem(scenario_from_dict(_obstacle_field(n + 1)), commanded=[0])
+
+
 @pytest.mark.slow
 def test_two_ships_and_2000_obstacles_compile_and_run_within_60_s_and_1_gb(tmp_path):
     # measured on the 2-core machine: 17 s and 229 MiB (whole process tree) with an empty cache
