@@ -84,6 +84,9 @@ def _library(layout: Layout) -> tuple[ca.Function, ...]:
     return _keep(layout, compiled if also else [compiled])
 
 
+_library.cache_clear = _LIBRARIES.clear  # as an lru_cache's: forgets the loaded libraries (unregister, tests)
+
+
 def load_if_cached(layout: Layout) -> bool:
     """Load the compiled library of ``layout`` if the disk cache holds it (trusted), and say whether it did.
 
@@ -692,5 +695,5 @@ def simulate_batch_history(layout: Layout, X0: np.ndarray, P: np.ndarray, *, chu
     return out, busy, BatchHistory(t, states)
 
 
-forget_on_unregister(_LIBRARIES.clear, _chunk.cache_clear, _scenario_chunk.cache_clear, _bound.cache_clear,
+forget_on_unregister(_library.cache_clear, _chunk.cache_clear, _scenario_chunk.cache_clear, _bound.cache_clear,
                      _stepper.cache_clear)
