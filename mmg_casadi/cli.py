@@ -37,6 +37,7 @@ from mmg_casadi.scenarios.generate import generate, load_description, override, 
 from mmg_casadi.scenarios.interchange import convert_file
 from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
 from mmg_casadi.scenarios.run import packaged_names, packaged_scenario, packaged_scenarios, run_scenario
+from mmg_casadi.scenarios.routes import warning_line
 from mmg_casadi.scenarios.scenario import dump_scenario, load_scenario, scenario_from_dict, with_method
 from mmg_casadi.signals import end_deferred_signals, exit_status, signal_name, terminate_as_interrupt
 from mmg_casadi.vessel.library import load_vessel, vessel_table
@@ -438,6 +439,8 @@ def _simulate(a) -> dict:
     if a.method:
         sc = with_method(sc, a.method)
     res = run_scenario(sc, params=_params_of(a))
+    for w in res.metrics["route_warnings"]:  # legs across land or within the grounding clearance: one line each
+        print(f"mmg-casadi: warning: {warning_line(w)}", file=sys.stderr)
     res.save(a.out)
     return res.metrics
 

@@ -260,6 +260,10 @@ def plot_paths(result, ax, *, title=None):
         if enc:
             lab += f" ({enc})"
         draw_path(ax, x, y, psi, c, label=lab)
+        route = result.metrics["ships"][i].get("route") or {}
+        if route.get("planned"):  # the route planned around the land (mmg_casadi.scenarios.routes)
+            pts = np.asarray([sc.ships[i].start, *route["waypoints"]])
+            ax.plot(pts[:, 1], pts[:, 0], ls="--", color=c, lw=0.8, label=f"{names[i]}: planned route")
         g = sc.ships[i].waypoints[-1]
         draw_goal(ax, g[0], g[1], c, tol=result.params["goal_tolerance"])
         for wp in sc.ships[i].waypoints[:-1]:
@@ -279,7 +283,8 @@ def plot_paths(result, ax, *, title=None):
         draw_circle(ax, traj.state("x", 0)[k], traj.state("y", 0)[k], r_safe, color=COLORS[0], ls=":", lw=0.8)
     marine_axes(ax)
     ax.legend(fontsize=8, loc="best")
-    status = "collision" if result.metrics["collision"] else "no collision"
+    kinds = {s["collision_kind"] for s in result.metrics["ships"]}
+    status = "grounding" if "land" in kinds else "collision" if result.metrics["collision"] else "no collision"
     ce = "–" if own["ce"] is None else f"{own['ce']:.3f}"
     mcte = "–" if own["mcte"] is None else f"{own['mcte']:.3f}"
     ax.set_title(title or f"{result.metrics['method']}: {status}; own ship CE {ce}, MCTE {mcte} L", fontsize=9)

@@ -16,8 +16,9 @@ from matplotlib.figure import Figure
 from mmg_casadi.guidance import methods as registry
 from mmg_casadi.io import write_json
 from mmg_casadi.params import resolve
-from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_circle, draw_goal, draw_path, marine_axes
+from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_circle, draw_goal, draw_land, draw_path, marine_axes
 from mmg_casadi.scenarios.scenario import with_method
+from mmg_casadi.scenarios.routes import warning_line
 from mmg_casadi.scenarios.run import run_scenario, write_outputs
 
 ALL_METHODS = tuple(m for m in registry.AVOIDING)
@@ -59,6 +60,8 @@ def _run_cases(cases: dict, methods, out: Path, params, title: str, results: dic
         results[case] = {}
         for m in methods:
             r = run_scenario(with_method(sc, m), params=params)
+            for w in r.metrics["route_warnings"]:
+                print(f"  {case:>14s} {m:>18s}: {warning_line(w)}", file=sys.stderr)
             write_outputs(r, out / case / m)
             results[case][m] = r
             metrics["cases"][case][m] = r.metrics
@@ -92,8 +95,10 @@ def plot_comparison(by_method: dict, path, title="") -> Figure:
         for w in sc.walls:
             pts = np.asarray(w.points)
             ax.plot(pts[:, 1], pts[:, 0], "k-", lw=2)
+        draw_land(ax, sc.land)
         marine_axes(ax)
-        st = "COLLISION" if r.metrics["collision"] else "no collision"
+        kinds = {s["collision_kind"] for s in r.metrics["ships"]}
+        st = "GROUNDING" if "land" in kinds else "COLLISION" if r.metrics["collision"] else "no collision"
         ax.set_title(f"{m}: {st}", fontsize=9)
         ax.legend(fontsize=7, loc="best")
         a2 = fig.add_subplot(gs[1, col])
