@@ -35,6 +35,29 @@ def test_the_look_ahead_is_two_advances_of_the_own_hull():
     assert hull_advance("kvlcc2", "kcs") == pytest.approx(3.085 * 320.0 / 230.0, abs=2e-3)
 
 
+def test_the_compiled_look_ahead_is_the_reference_one():
+    # the step's loop over the edges (far ones skipped by a conditional) against the plain expression, both
+    # directions, on environment 6's land from random positions and headings
+    import casadi as ca
+    from mmg_casadi.guidance.land_ahead import land_ahead_function, land_seen_ahead
+    land = sample_strait(3)["land"]
+    segs = ca.DM(np.array([[*a, *b] for poly in land for a, b in zip(poly, np.roll(poly, -1, axis=0))]).T)
+    f = land_ahead_function(segs.size2())
+    rng = np.random.default_rng(0)
+    hits = 0
+    for _ in range(60):
+        pos = ca.DM(rng.uniform([0, 20], [100, 80]))
+        a, b = rng.uniform(-np.pi, np.pi, 2)
+        dc, do = ca.DM([np.cos(a), np.sin(a)]), ca.DM([np.cos(b), np.sin(b)])
+        got = f(pos, dc, do, 7.1, 1.07, segs)
+        for k, d in ((0, dc), (2, do)):
+            ref = land_seen_ahead(pos, d, 7.1, 1.07, segs)
+            assert float(got[k]) == float(ref["ahead"]) and np.array_equal(np.array(got[k + 1]),
+                                                                           np.array(ref["point"]))
+            hits += int(float(ref["ahead"]))
+    assert 10 < hits < 110
+
+
 @pytest.mark.parametrize("method", ["colregs-vortex", "velocity-obstacle"])
 def test_a_ship_alone_rounds_an_island_on_her_track(method):
     # main a6a8e24: every method grounded at t = 25.0, as the ship that avoids nothing: the method was only switched

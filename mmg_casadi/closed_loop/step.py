@@ -41,7 +41,7 @@ from mmg_casadi.guidance import fairway, hazards, methods
 from mmg_casadi.guidance.heading_control import pd_heading
 from mmg_casadi.guidance.ilos import (ilos_heading, ilos_integrator_rate, ilos_step_terms, limit_turn,
                                       switch_waypoint)
-from mmg_casadi.guidance.land_ahead import hull_advance, land_seen_ahead, land_source
+from mmg_casadi.guidance.land_ahead import hull_advance, land_ahead_function, land_source
 from mmg_casadi.guidance.methods import GuidanceInputs, command_from_vector, forget_on_unregister
 from mmg_casadi.vessel import environment
 from mmg_casadi.vessel.actuators import engine_step
@@ -385,10 +385,9 @@ def _land_ahead(layout: Layout, pos, vel, psi, psi_ilos, walls, Pi: dict, P: dic
     course = ca.if_else(speed > 1e-6, vel / ca.fmax(speed, 1e-6), ca.vertcat(ca.cos(psi), ca.sin(psi)))
     clearance = Pi["half_beam"] + P["grounding_margin"] + P["land_clearance"]
     reach, land = _lookahead(layout, P, vessel), walls[:, layout.n_walls - layout.n_land:]
-    now = land_seen_ahead(pos, course, reach, clearance, land)
-    ordered = land_seen_ahead(pos, ca.vertcat(ca.cos(psi_ilos), ca.sin(psi_ilos)), reach, clearance, land)
-    return {"ahead": ca.logic_or(now["ahead"], ordered["ahead"]),
-            "point": ca.if_else(now["ahead"], now["point"], ordered["point"])}
+    now, p_now, ordered, p_ordered = land_ahead_function(layout.n_land)(
+        pos, course, ca.vertcat(ca.cos(psi_ilos), ca.sin(psi_ilos)), reach, clearance, land)
+    return {"ahead": ca.logic_or(now, ordered), "point": ca.if_else(now, p_now, p_ordered)}
 
 
 def _lane(layout: Layout, terms: dict, pos, y_int, walls, P: dict, vessel: str):

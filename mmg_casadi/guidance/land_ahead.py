@@ -32,8 +32,8 @@ Examples
 >>> import casadi as ca
 >>> coast = ca.DM([[20.0, -50.0, 20.0, 50.0]]).T            # a coast across the course, 20 L ahead
 >>> r = land_seen_ahead(ca.DM([0, 0]), ca.DM([1, 0]), 25.0, 1.0, coast)
->>> float(r["ahead"]), [float(v) for v in r["point"]], float(r["distance"])
-(1.0, [20.0, 0.0], 20.0)
+>>> float(r["ahead"]), r["point"].T, float(r["distance"])
+(1.0, DM([[20, 0]]), 20.0)
 >>> float(land_seen_ahead(ca.DM([0, 0]), ca.DM([1, 0]), 15.0, 1.0, coast)["ahead"])
 0.0
 """
@@ -110,15 +110,78 @@ def land_seen_ahead(pos, direction, reach, clearance, segments) -> dict:
     for k in range(segments.size2()):
         seg = segments[:, k]
         blocked = _path_blocked(pos, reach, clearance, seg, cos_u, sin_u)
-        a, ab = seg[0:2], seg[2:4] - seg[0:2]
-        t = ca.fmin(ca.fmax(ca.dot(pos - a, ab) / ca.fmax(ca.dot(ab, ab), R_MIN ** 2), 0), 1)
-        near = a + t * ab
-        d2 = ca.sumsqr(pos - near)
+        near, d2 = _nearest(pos, seg)
         take = ca.logic_and(blocked, d2 < best)
         best = ca.if_else(take, d2, best)
         point = ca.if_else(take, near, point)
     ahead = best < _FAR / 2
     return {"ahead": ahead, "point": point, "distance": ca.if_else(ahead, ca.sqrt(best), _FAR)}
+
+
+def _nearest(pos, seg):
+    """The point of segment ``seg`` nearest to ``pos`` and its squared distance."""
+    a, ab = seg[0:2], seg[2:4] - seg[0:2]
+    t = ca.fmin(ca.fmax(ca.dot(pos - a, ab) / ca.fmax(ca.dot(ab, ab), R_MIN ** 2), 0), 1)
+    near = a + t * ab
+    return near, ca.sumsqr(pos - near)
+
+
+@functools.lru_cache(maxsize=None)
+def _pass() -> ca.Function:
+    """One segment's step of :func:`land_ahead_function`: ``(acc, seg, pos, course, ordered, reach, clearance) ->
+    acc`` with ``acc`` = (best d², point) along the course, then along the ordered heading; a segment farther than
+    ``reach + clearance`` cannot block either path and is skipped (a conditional: not evaluated)."""
+    acc, seg, pos = ca.SX.sym("acc", 6), ca.SX.sym("seg", 4), ca.SX.sym("pos", 2)
+    dc, do, reach, r = ca.SX.sym("course", 2), ca.SX.sym("ordered", 2), ca.SX.sym("reach"), ca.SX.sym("r")
+    near, d2 = _nearest(pos, seg)
+    out = []
+    for k, u in enumerate((dc, do)):
+        best, point = acc[3 * k], acc[3 * k + 1:3 * k + 3]
+        take = ca.logic_and(_path_blocked(pos, reach, r, seg, u[0], u[1]), d2 < best)
+        out += [ca.if_else(take, d2, best), ca.if_else(take, near, point)]
+    ins = [acc, seg, pos, dc, do, reach, r]
+    near_f = ca.Function("land_ahead_near", ins, [ca.vertcat(*out)], {"cse": True})
+    far_f = ca.Function("land_ahead_far", ins, [acc])
+    cond = ca.Function.conditional("land_ahead_switch", [near_f], far_f)
+    xm = [ca.MX.sym(f"x{i}", v.sparsity()) for i, v in enumerate(ins)]
+    a, b, p = xm[1][0:2], xm[1][2:4], xm[2]
+    ab = b - a
+    t = ca.fmin(ca.fmax(ca.dot(p - a, ab) / ca.fmax(ca.dot(ab, ab), R_MIN ** 2), 0), 1)
+    far_away = ca.sumsqr(p - a - t * ab) >= (xm[5] + xm[6]) ** 2  # index 1: the far branch
+    return ca.Function("land_ahead_pass", xm, [cond(far_away, *xm)])
+
+
+@functools.lru_cache(maxsize=None)
+def land_ahead_function(w: int) -> ca.Function:
+    """Never-inlined ``(pos, course, ordered, reach, clearance, segments 4×w) -> (ahead_course, point_course,
+    ahead_ordered, point_ordered)``: :func:`land_seen_ahead` along two directions at once, a loop (``mapaccum``)
+    over the segments that skips those out of reach, so the cost grows with the land near the ship only.
+
+    Parameters
+    ----------
+    w : int
+        Number of land edges (≥ 1).
+
+    Returns
+    -------
+    casadi.Function
+        The function; per direction 1/0 and the point of land met (the ship's position when none).
+
+    Examples
+    --------
+    >>> import casadi as ca
+    >>> f = land_ahead_function(1)
+    >>> out = f([0, 0], [1, 0], [0, 1], 25.0, 1.0, ca.DM([20.0, -50.0, 20.0, 50.0]))
+    >>> float(out[0]), out[1].T, float(out[2])
+    (1.0, DM([[20, 0]]), 0.0)
+    """
+    pos, dc, do = ca.MX.sym("pos", 2), ca.MX.sym("course", 2), ca.MX.sym("ordered", 2)
+    reach, r, segs = ca.MX.sym("reach"), ca.MX.sym("r"), ca.MX.sym("segments", 4, w)
+    init = ca.vertcat(_FAR, pos, _FAR, pos)
+    acc = _pass().mapaccum(w)(init, segs, ca.repmat(pos, 1, w), ca.repmat(dc, 1, w), ca.repmat(do, 1, w),
+                              ca.repmat(reach, 1, w), ca.repmat(r, 1, w))[:, -1]
+    return ca.Function(f"land_ahead_w{w}", [pos, dc, do, reach, r, segs],
+                       [acc[0] < _FAR / 2, acc[1:3], acc[3] < _FAR / 2, acc[4:6]], {"never_inline": True})
 
 
 def land_source(pos, point, lam):
@@ -142,8 +205,8 @@ def land_source(pos, point, lam):
     --------
     >>> import casadi as ca
     >>> v = land_source(ca.DM([0, 0]), ca.DM([5, 0]), 10 * ca.pi)
-    >>> [float(c) for c in v]
-    [-1.0, 0.0]
+    >>> v.T
+    DM([[-1, 0]])
     """
     d = pos - point
     r2 = ca.fmax(ca.sumsqr(d), R_MIN ** 2)
