@@ -11,7 +11,11 @@ A method (:mod:`mmg_casadi.guidance.methods`) returns a :class:`~mmg_casadi.guid
 desired-heading vector and, optionally, a propeller speed, which the engine
 (:func:`~mmg_casadi.vessel.actuators.engine_step`) follows at its rate; a method that commands no speed keeps the
 ship's service propeller speed, exactly. Hazards (:mod:`mmg_casadi.guidance.hazards`): circular obstacles are
-neighbours of the methods; walls add their field to every method's vector; touching either is a collision.
+neighbours of the methods; walls add their field to every method's vector; touching either is a collision. Land
+is seen ahead (:mod:`mmg_casadi.guidance.land_ahead`): in layouts with land a method is in charge while the
+ship's path ahead reaches it, and a method without a land test of its own gets the paper's wall source at the
+point of land met. A method that keeps Rule 9 (``Method.rule9``) follows the starboard lane of a narrow channel
+(:mod:`mmg_casadi.guidance.fairway`). A collision or grounding ends that ship's voyage (:func:`stop_on_contact`).
 
 Current and wind (table group "environment", :mod:`mmg_casadi.vessel.environment`): a layout with either (or with
 crab-angle compensation) is ``Layout.disturbed`` and its step takes
