@@ -111,6 +111,8 @@ def test_grounded_in_simulate_statistics_and_encounters_alike(tmp_path, capsys):
     assert main(["simulate", str(tmp_path / "set" / "island.toml"), "--out", str(tmp_path / "sim")]) == 0
     own = json.loads((tmp_path / "sim" / "metrics.json").read_text())["ships"][0]
     assert (own["status"], own["reached_goal"], own["time_to_goal"]) == ("grounded", False, None)
+    said = capsys.readouterr().out.splitlines()[0]  # simulate's summary line
+    assert said.startswith("own") and "grounded on land" in said and "reached" not in said
     # the Monte Carlo's row (study statistics writes it to runs.csv): a grounding, the own ship not arrived
     (row,) = run_scenarios([sc], time_guidance_calls=False)
     assert (row["success"], row["failure"], row["failure_mechanism"]) == (False, "grounding", "grounding")
