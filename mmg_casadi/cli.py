@@ -41,6 +41,7 @@ from mmg_casadi.scenarios.generate import generate, load_description, override, 
 from mmg_casadi.scenarios.interchange import convert_file
 from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
 from mmg_casadi.scenarios.run import packaged_names, packaged_scenario, packaged_scenarios, run_scenario
+from mmg_casadi.scenarios.routes import warning_line
 from mmg_casadi.scenarios.scenario import dump_scenario, load_scenario, scenario_from_dict, with_method
 from mmg_casadi.signals import (CLI_SIGNALS, end_deferred_signals, exit_status, is_program, settle, signal_name,
                                 terminate_as_interrupt)
@@ -130,6 +131,8 @@ def _simulate(a) -> dict:
         from mmg_casadi.animation import check_animation_path
         check_animation_path(a.animate)
     res = run_scenario(sc, params=_params_of(a))
+    for w in res.metrics["route_warnings"]:  # legs across land or within the grounding clearance: one line each
+        print(f"mmg-casadi: warning: {warning_line(w)}", file=sys.stderr)
     units = Units.of(a.units, res.trajectory.layout.unit_vessel())  # the own ship's hull sets L and U
     res.save(a.out, units=units if units.si else None)
     if a.animate is not None:

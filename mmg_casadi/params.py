@@ -343,6 +343,32 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "this margin of land ([[land]] edges; channel walls keep the hull's side)", "our choice: 0, the hull's side "
        "at the coastline, as the paper's walls; a margin stands for the bank and under-keel clearance a chart's "
        "depth contour leaves out", "walls"),
+    _P("land_lookahead", 2.0, 0.0, None, "advances", "in layouts with land, a method takes over from ILOS while "
+       "the ship's straight path ahead over this many advances of her own hull (90° turn at her largest rudder "
+       "angle from her design speed; 3.56 L for the KCS: 7.1 L, 7.1 L/U at her design speed) comes within half "
+       "her beam + grounding_margin + land_clearance of land (mmg_casadi.guidance.land_ahead)", "our choice: "
+       "within one advance a ship can no longer turn parallel to a coast ahead; two leave room for the rudder to "
+       "come over and for a turn short of hard-over", "walls", low_open=True),
+    _P("land_clearance", 1.0, 0.0, None, "L", "clearance from land beyond half the beam + grounding_margin that "
+       "the path ahead of the land look-ahead keeps", "our choice: as vo_land_margin, half the 2 L collision "
+       "distance (paper §Statistical Analysis)", "walls"),
+    _P("route", "as-given", None, None, "", "'plan': every ship's route is replaced by the shortest one that "
+       "clears every land polygon by route_clearance (a visibility graph over the buffered polygons, "
+       "mmg_casadi.scenarios.route_plan); 'as-given': the waypoints as written, each leg checked against the land",
+       "our choice", "walls", kind="choice", choices=("as-given", "plan")),
+    _P("route_clearance", 2.0, 0.0, None, "L", "least distance of a planned route from land (route = 'plan')",
+       "our choice: the 2 L collision distance, more than the land look-ahead's half beam + land_clearance "
+       "(1.07 L for the KCS), so a ship on her planned route is not taken from ILOS for the land beside it",
+       "walls", low_open=True),
+    _P("channel_width", 20.0, 0.0, None, "L", "widest channel (bank to bank across the route) in which a method "
+       "that keeps Rule 9 (colregs-vortex) keeps to its starboard side", "our choice: includes the paper's 10 L "
+       "channel, environment 6's 8-16 L straits and the fjord's 6 L channels, and leaves out water wider than "
+       "the 2 × R_safe (30 L) across which the guidance sees both banks", "walls", low_open=True),
+    _P("bank_clearance", 3.0, 0.0, None, "L", "distance from the starboard bank of a narrow channel of the lane "
+       "a method that keeps Rule 9 follows (the centre line in a channel narrower than twice this)", "our choice: "
+       "the paper's wall field acts within 2 L (wall_d_act), so in the lane the bank does not push the ship back "
+       "to the centre line; two ships in their lanes of an 8 L strait pass 4 L apart, twice the collision "
+       "distance", "walls", low_open=True),
     # velocity obstacle
     _P("vo_candidates", 80, 1, 720, "", "candidate headings of the velocity obstacle (at the current speed)",
        "our choice: 4.5° resolution (at most 0.5°: the compiled loop grows with the count)", "velocity-obstacle",

@@ -440,6 +440,10 @@ def plot_paths(result, ax, *, title=None, units=None, legend: bool = True, n_out
                 ax.plot(u.length(route[:, 1]), u.length(route[:, 0]), ls=":", lw=0.6, color=c, alpha=0.7, zorder=2)
             g = route[-1]
             draw_goal(ax, g[0], g[1], c, tol=result.params["goal_tolerance"], units=u)
+        planned = result.metrics["ships"][i].get("route") or {}
+        if planned.get("planned"):  # the route planned around the land (mmg_casadi.scenarios.routes)
+            pts = np.asarray([sc.ships[i].start, *planned["waypoints"]])
+            ax.plot(u.length(pts[:, 1]), u.length(pts[:, 0]), ls="--", lw=0.8, color=c, zorder=2)
     drawn = fs.draw_hazards(ax, sc, r_safe, units=u)
     marks = _cpa_marks(result, r_safe)
     if N > 1:  # R_safe about the own ship where she came closest (about an obstacle: drawn with the obstacle)
@@ -465,7 +469,8 @@ def plot_paths(result, ax, *, title=None, units=None, legend: bool = True, n_out
                                      collision=collided, time_unit=u.time_unit)
         ax.legend(handles=handles, loc="best")
     own = result.metrics["ships"][0]
-    status = "collision" if result.metrics["collision"] else "no collision"
+    kinds = {s["collision_kind"] for s in result.metrics["ships"]}
+    status = "grounding" if "land" in kinds else "collision" if result.metrics["collision"] else "no collision"
     ce = "–" if own["ce"] is None else f"{own['ce']:.3f}"
     mcte = "–" if own["mcte"] is None else u.fmt_length(own["mcte"])
     ax.set_title(title or f"{result.metrics['method']}: {status}; own ship CE {ce}, MCTE {mcte}")

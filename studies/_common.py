@@ -20,6 +20,7 @@ from mmg_casadi.params import resolve
 from mmg_casadi import figstyle as fs
 from mmg_casadi.plotting import escape_text, plot_paths, tick_step
 from mmg_casadi.scenarios.scenario import with_method
+from mmg_casadi.scenarios.routes import warning_line
 from mmg_casadi.scenarios.run import run_scenario, write_outputs
 
 ALL_METHODS = tuple(m for m in registry.AVOIDING)
@@ -61,6 +62,8 @@ def _run_cases(cases: dict, methods, out: Path, params, title: str, results: dic
         results[case] = {}
         for m in methods:
             r = run_scenario(with_method(sc, m), params=params)
+            for w in r.metrics["route_warnings"]:
+                print(f"  {case:>14s} {m:>18s}: {warning_line(w)}", file=sys.stderr)
             write_outputs(r, out / case / m)
             results[case][m] = r
             metrics["cases"][case][m] = r.metrics
@@ -104,7 +107,8 @@ def plot_comparison(by_method: dict, path, title="") -> Figure:
     for k, (m, r) in enumerate(by_method.items()):
         ax = fig.add_subplot(gs[k // cols, k % cols])
         maps.append(ax)
-        st = "COLLISION" if r.metrics["collision"] else "no collision"
+        kinds = {s["collision_kind"] for s in r.metrics["ships"]}
+        st = "GROUNDING" if "land" in kinds else "COLLISION" if r.metrics["collision"] else "no collision"
         d_min = min((p["min_distance"] for p in r.metrics["pairs"]), default=float("nan"))
         plot_paths(r, ax, title=f"{m}\n{st}, closest {d_min:.2f} L", legend=False, n_outlines=3,
                    ticks=step)

@@ -7,7 +7,9 @@ ship's safety, COLREG verdicts (:func:`mmg_casadi.colregs.scorer.score_encounter
 ``SET_DIR/*.toml`` (in name order) and writes
 
 * ``DIR/situations.csv``: per situation and method (:data:`SITUATION_COLUMNS`): ``safe`` (the own ship reached
-  her goal without a collision), ``min_distance`` (L, to the nearest target), ``delay`` (L/U, time to goal minus
+  her goal without a collision), ``status`` (her outcome, :data:`mmg_casadi.closed_loop.outcome.OUTCOMES`:
+  ``grounded`` or ``collided`` when a contact ended her voyage), ``min_distance`` (L, to the nearest target),
+  ``delay`` (L/U, time to goal minus
   the planned voyage time; empty if she did not arrive), the number of encounters with a risk of collision and of
   those kept, and ``wall_s``, the run's wall-clock time (the only column that differs between repeated runs);
 * ``DIR/encounters.csv``: per situation, method and target (:data:`ENCOUNTER_COLUMNS`): the requested encounter
@@ -46,8 +48,8 @@ from mmg_casadi.scenarios.scenario import load_scenario, with_method
 
 DEFAULT_METHODS = ("colregs-vortex", "modified-vortex", "velocity-obstacle")
 TARGETS = ("hold", "avoid")
-SITUATION_COLUMNS = ("situation", "method", "targets", "ships", "safe", "reached_goal", "collided", "min_distance",
-                     "delay", "encounters", "kept", "wall_s")
+SITUATION_COLUMNS = ("situation", "method", "targets", "ships", "safe", "reached_goal", "collided", "status",
+                     "min_distance", "delay", "encounters", "kept", "wall_s")
 ENCOUNTER_COLUMNS = ("situation", "method", "target", "requested", "role", "as_generated", "applicable",
                      "compliant", "score", "rules_not_kept", "cpa")
 TIMING_COLUMNS = ("wall_s",)
@@ -252,7 +254,8 @@ def run(out, *, set_dir, methods=None, targets: str = "hold", params=None) -> di
                 row = {"situation": name, "method": m, "targets": targets, "ships": len(sc.ships),
                        "safe": bool(own["reached_goal"] and not own["collided"]),
                        "reached_goal": bool(own["reached_goal"]),
-                       "collided": bool(own["collided"]), "min_distance": float(np.min(res.own_distance())),
+                       "collided": bool(own["collided"]), "status": own["status"],
+                       "min_distance": float(np.min(res.own_distance())),
                        "delay": own["delay"], "encounters": len(risky),
                        "kept": sum(bool(e["compliant"]) for e in risky),
                        "wall_s": wall}

@@ -1,5 +1,7 @@
 """Land: the shipped scenarios with coastlines (a strait with a crossing, a fjord entrance with an island, the
-paper's narrow channel with its banks as land), every method, figures with the land filled.
+paper's narrow channel with its banks as land) and the land library of issue 43 (an island on the track, an
+island off the track, a headland to round, a strait with traffic, a channel bend), every method, figures with the
+land filled.
 
 ``mmg-casadi study land [--methods a,b] [PARAMS] --out DIR`` writes ``<case>/<method>/`` per run,
 ``<case>.png`` per case and ``metrics.json``; a ship touching land grounds (``collision_kind`` ``"land"``).
@@ -11,7 +13,8 @@ from mmg_casadi.scenarios.run import packaged_scenario
 
 from ._common import ALL_METHODS, run_cases
 
-CASES = ("strait_crossing", "fjord_island", "narrow_channel_land")
+CASES = ("strait_crossing", "fjord_island", "narrow_channel_land", "land_island_on_track", "land_island_off_track",
+         "land_headland", "land_strait_traffic", "land_channel_bend")
 """Shipped scenarios of the land study (``mmg_casadi/data/scenarios/<name>.toml``)."""
 
 

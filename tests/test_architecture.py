@@ -139,18 +139,19 @@ def test_a_registered_method_commands_heading_and_speed(toy_method, n_targets):
     pr = build_problem(Scenario(Settings(TOY), [own, *targets]), {"t_max": 40.0})
     tr = simulate(pr.layout, pr.x0, pr.p)
     rpm0, rate = pr.ships[0]["n_rpm"], pr.model.params["engine_rate_rpm_s"]
-    n = tr.state("n_prop", 0)
-    react = tr.auxiliary("reactive", 0) > 0.5
+    sailing = tr.state("status", 0) == 0  # a collision ends her voyage, engine stopped (stop_on_contact)
+    n = tr.state("n_prop", 0)[sailing]
+    react = tr.auxiliary("reactive", 0)[sailing[:-1]] > 0.5
     k = int(np.argmax(react))
     assert react.any() and n[k] == rpm0                   # full service rpm until the method takes charge
     dt_s = pr.model.params["dt"] * load_vessel().ship.time_scale_s
     assert np.min(np.diff(n)) >= -rate * dt_s * (1 + 1e-12)  # the engine follows at its rate ...
     assert n.min() == pytest.approx(0.5 * rpm0)           # ... down to the command
-    u = tr.state("u", 0)
+    u = tr.state("u", 0)[sailing]
     assert u[-1] < 0.8 * u[0]                             # the speed command reached the model: the ship slows
     assert tr.state("psi", 0)[k + 8] > 0.2                # and it turned to starboard
     for i in range(1, 1 + n_targets):                     # a method without a speed command: rpm exactly kept
-        assert np.all(tr.state("n_prop", i) == pr.ships[i]["n_rpm"])
+        assert np.all(tr.state("n_prop", i)[tr.state("status", i) == 0] == pr.ships[i]["n_rpm"])
 
 
 def test_register_refuses_a_shipped_name():

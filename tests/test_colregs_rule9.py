@@ -1,12 +1,16 @@
 """COLREG Rule 9(a) scored (issue 24): the share of a ship's time in a narrow channel (banks on both sides across
-her track, at most CHANNEL_WIDTH apart) on the starboard side of its centre line for her direction of travel."""
+her track, at most the profile's rule9_width apart) on the starboard side of its centre line for her direction of travel."""
 
 import math
 
 import numpy as np
 import pytest
 
-from mmg_casadi.colregs.narrow_channel import CHANNEL_WIDTH, KEPT_SHARE, channel_sides, rule9
+from mmg_casadi.colregs.narrow_channel import channel_sides, rule9
+from mmg_casadi.colregs.profiles import scoring_profile
+
+CHANNEL_WIDTH = scoring_profile().rule9_width
+KEPT_SHARE = scoring_profile().rule9_kept_share
 from mmg_casadi.montecarlo.execution import run_scenarios
 from mmg_casadi.scenarios.run import packaged_scenario, run_scenario
 from mmg_casadi.scenarios.scenario import with_method

@@ -38,14 +38,15 @@ def _leg(goal=(500.0, 0.0), heading=0.0, t_max=50.0, environment=None):
 # SHA-256 of the C source of these calm steps as generated without the environment wired in (CasADi 3.8.2; re-recorded
 # when the velocity obstacle's held heading became a state row, and again when the engine's propeller-speed row
 # (with its lag and limits), the per-leg propeller speeds and the wall-collision check entered the step, and when
-# each ship's own length entered its parameters (per-ship collision geometry);
+# each ship's own length entered its parameters (per-ship collision geometry), and when a contact came to end a
+# ship's voyage (issue 43, closed_loop.step.stop_on_contact: `study all` the same except after a collision);
 # `study all` and `study statistics --runs 200 --envs 1-5` gave the same outputs before and after): a calm layout
 # must keep exactly the calm-water closed loop (and so every paper number; tests/test_regression_runs.py checks
 # the outcomes).
 CALM_SOURCE_SHA256 = {
-    Layout(("none",)): "8be222e13bb438ca48963e58e41c1b3546b09a74c493559b23528757f73e617c",
+    Layout(("none",)): "a9f3bed1adf1fc2c0fa0fa756818aae4abd1f89ad1ea36df63dc92d04b067493",
     Layout(("modified-vortex",) * 3, n_obstacles=1):
-        "3e602ae500e9fe5986b73e74fd35fa51b106643343e18c3f866f5efa20b411f1",
+        "b5db8106e34e6d1d8339b28c44626f3890f72b171474012faddcc9d8512a5185",
 }
 
 

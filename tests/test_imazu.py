@@ -11,6 +11,7 @@ from mmg_casadi.colregs.profiles import iitm_lab, scoring_profile
 from mmg_casadi.scenarios.imazu import CASES, imazu_case, plot_imazu, run_imazu, stand_on_bound
 from mmg_casadi.vessel.maneuvers import last_moment_manoeuvre, turning_circle
 from mmg_casadi.scenarios.scenario import scenario_from_dict
+from mmg_casadi.scenarios.colregs_cases import SAIL_THROUGH
 
 # Imazu's problems as encoded in MarWaltz/TUD_RL tud_rl/envs/_envs/Imazu.py (after Sawada et al. 2021):
 # case -> number of targets; cases 1-4 have one target ship, 5-12 two, 13-22 three.
@@ -112,7 +113,7 @@ def test_every_target_on_a_collision_course_yields_a_scored_encounter():
     # own ship and targets hold course and speed: every target meets the own ship at the same point, so every
     # (own ship, target) pair has a risk of collision and a scored encounter; the single-target cases' roles are
     # Imazu's: 1 head-on, 2 crossing from starboard, 3 overtaking the slower ship ahead, 4 crossing from port
-    rows = run_imazu("none", "hold")
+    rows = run_imazu("none", "hold", params={"collision_distance": SAIL_THROUGH})  # all meet: sail through contacts
     for r in rows:
         others = sorted({e["other"] for e in r["encounters"]})
         assert others == [f"target{i}" for i in range(1, N_TARGETS[r["case"]] + 1)], (r["case"], others)
@@ -125,7 +126,7 @@ def test_under_ntnu_2023_the_ample_time_of_a_duty_to_act_has_ended_at_the_start_
     # the meeting point, so a target whose course differs from the own ship's by D starts 80 sin(D/2) L away: a
     # fine crossing or the slow ship ahead starts inside 22 L, and no action can come before the first sample
     profile = scoring_profile("ntnu-2023")
-    rows = run_imazu("none", "hold", params={"colregs_profile": "ntnu-2023"})
+    rows = run_imazu("none", "hold", params={"colregs_profile": "ntnu-2023", "collision_distance": SAIL_THROUGH})
     late_at_start = {}
     for r in rows:
         ships = imazu_case(r["case"], method="none", targets="hold")["ships"]

@@ -53,14 +53,20 @@ def test_grounding_is_the_run_failure_and_its_mechanism():
     assert row["failure_time"] == pytest.approx(20.0)
 
 
-def test_land_edges_act_like_the_paper_walls():
+def test_land_edges_act_like_the_paper_walls_and_are_seen_ahead():
     # the paper's narrow channel with its banks as land polygons whose first edges are the walls: every other
-    # edge lies beyond the walls' range of action (2 L), so the trajectories are those with walls, to the bit
+    # edge lies beyond the walls' range of action (2 L). With the look-ahead shrunk to nothing (a path ahead of
+    # 1e-9 advances that must keep clear of the hull's side only) the trajectories are those with walls, to the
+    # bit; with the default look-ahead land is seen ahead and they differ
     walls = run_scenario(with_method(packaged_scenario("narrow_channel"), "modified-vortex")).trajectory
-    land = run_scenario(with_method(packaged_scenario("narrow_channel_land"), "modified-vortex")).trajectory
+    land_sc = with_method(packaged_scenario("narrow_channel_land"), "modified-vortex")
+    near = run_scenario(land_sc, {"land_lookahead": 1e-9, "land_clearance": 0.0}).trajectory
     for name in ("x", "y", "psi"):
         for i in range(2):
-            assert np.array_equal(walls.state(name, i), land.state(name, i))
+            assert np.array_equal(walls.state(name, i), near.state(name, i))
+    ahead = run_scenario(land_sc)
+    assert not np.array_equal(walls.state("y", 0), ahead.trajectory.state("y", 0)[:len(walls.t)])
+    assert not ahead.metrics["collision"]
 
 
 @pytest.mark.parametrize("case", ["strait_crossing", "fjord_island"])

@@ -3,6 +3,8 @@
 ``tests/data/runs_79ba6c0.csv`` holds runs 0-19 of every (environment, method) cell of ``mmg-casadi study
 statistics --runs 200`` (seed 0) as that commit wrote them (repr of the floats, so equality is to the bit). The
 batches, their width and chunking, and the compiled code have changed since; the outcome of every run must not.
+Since issue 43 a collision ends the colliding ships' voyages: a run that failed by a collision is the same up to
+the contact (success, failure, the pair and the time), and its own ship, held where she touched, never arrives.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ BEFORE = {"velocity-obstacle": {"vo_cone": "wide", "vo_hold": False}}
 changed since: Huang's cone, holding the chosen heading)."""
 COLUMNS = ("success", "failure", "failure_pair", "failure_time", "time_to_goal", "ce", "mcte", "fleet_success",
            "min_distance")
+CONTACT_COLUMNS = ("success", "failure", "failure_pair", "failure_time", "fleet_success")
+"""The columns a run that failed by a collision shares with the reference: those settled at the contact."""
 
 
 def _reference(env: int, method: str) -> list[dict]:
@@ -47,8 +51,13 @@ def _check(env: int, method: str):
     assert len(ref) == 20
     rows = run_batch(env, method, [int(r["run"]) for r in ref], 0, params=BEFORE.get(method))
     for r, row in zip(ref, rows):
-        for c in COLUMNS:
+        contact = r["failure"] in ("collision", "grounding")
+        for c in CONTACT_COLUMNS if contact else COLUMNS:
             assert _same(row[c], r[c]), f"env {env} {method} run {r['run']} {c}: {row[c]!r} != {r[c]!r}"
+        if contact:  # her voyage ended at the contact: she never arrived
+            assert math.isnan(row["time_to_goal"]), f"env {env} {method} run {r['run']} arrived after a contact"
+        if r["failure"] == "collision":  # held within the collision distance (2 L) where she touched
+            assert row["min_distance"] < 2.0
 
 
 @pytest.mark.parametrize("method", ["modified-vortex", "inverse-square", "velocity-obstacle"])

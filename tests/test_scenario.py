@@ -66,9 +66,12 @@ points = [[0.0, 5.0], [50.0, 55.0], [60, 55]]
 
 SCENARIO_DIR = files("mmg_casadi") / "data" / "scenarios"
 SHIPPED = ("head_on", "crossing", "overtaking", "static_obstacle", "conflict", "narrow_channel", "channel_crossing",
-           "narrow_channel_land", "strait_crossing", "fjord_island", "ais_replay")
+           "narrow_channel_land", "strait_crossing", "fjord_island", "ais_replay", "land_island_on_track",
+           "land_island_off_track", "land_headland", "land_strait_traffic", "land_channel_bend")
 SHIPPED_METHOD = {"channel_crossing": "velocity-obstacle-speed", "strait_crossing": "colregs-vortex",
-                  "fjord_island": "colregs-vortex", "ais_replay": "colregs-vortex"}
+                  "fjord_island": "colregs-vortex", "ais_replay": "colregs-vortex"} | {
+    f"land_{n}": "colregs-vortex" for n in ("island_on_track", "island_off_track", "headland", "strait_traffic",
+                                           "channel_bend")}
 """Shipped scenarios whose method is not the paper's modified vortex (the speed-action demonstration, the land
 scenarios written for colregs-vortex, the AIS replay)."""
 

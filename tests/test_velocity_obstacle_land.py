@@ -92,16 +92,18 @@ def test_heading_feasible_and_hold_drop_a_heading_into_land():
     assert float(vo.hold_heading(1.2, 0.0, [0, 0], 1.0, nb, v, [1], collision_distance=2.0)) == 0.0
 
 
-def test_the_speed_levels_test_land_at_their_own_speed():
-    # the coast 8 L ahead: at the service speed (path 10 L) the goal heading is blocked, at a quarter (2.5 L) not
+def test_the_speed_levels_test_land_over_the_service_path():
+    # the coast 8 L ahead: at the service speed (path 10 L) the goal heading is blocked, and at a quarter of it too
+    # (the ship does not shed her way at once: every level tests the service level's 10 L path), so slowing down
+    # does not make the goal heading admissible: she turns to a heading whose 10 L path is clear (49.5°, at 0.75 U,
+    # the velocity closest to the preferred one)
     shore = [[8.0], [-50.0], [8.0], [50.0]]
     lv = vo.speed_levels(100.0, 25.0, 100.0, 4)
     psi, rpm, k = vo.velocity_obstacle_speed([0, 0], [50, 0], ca.DM([[-30], [0]]), ca.DM.zeros(2, 1), [1],
                                              levels=lv, collision_distance=2.0, n_candidates=80, speed_weight=0.0,
                                              walls=shore, clearance=1.0, horizon=10.0)
-    assert int(vo.land_blocked([0, 0], float(lv[int(k)][1]), [float(psi)], shore, clearance=1.0,
-                               horizon=10.0)) == 0
-    assert int(k) > 0
+    assert int(vo.land_blocked([0, 0], 1.0, [float(psi)], shore, clearance=1.0, horizon=10.0)) == 0
+    assert abs(float(psi)) > 0.5 and int(k) == 1
 
 
 def test_colregs_vortex_close_quarters_filter_keeps_off_land():
@@ -124,8 +126,12 @@ def test_open_water_layouts_compile_the_same_code_and_walls_add_the_land_test():
         assert "vo_land" not in src
         assert "vo_land" in generate_source(build_closed_loop_step(Layout(methods, n_walls=2)))
     assert Layout(("velocity-obstacle",)).method_inputs == ()
-    assert Layout(("velocity-obstacle", "colregs-vortex"), n_walls=2).method_inputs[-2:] == (
-        "vo_land_horizon", "vo_land_margin")
+    assert Layout(("velocity-obstacle",), n_walls=2).method_inputs == ("vo_land_horizon", "vo_land_margin")
+    # land adds the grounding margin and the look-ahead; a method that keeps Rule 9 the fairway's lane
+    assert Layout(("velocity-obstacle",), n_walls=2, n_land=2).method_inputs == (
+        "vo_land_horizon", "vo_land_margin", "grounding_margin", "land_lookahead", "land_clearance")
+    assert Layout(("velocity-obstacle", "colregs-vortex"), n_walls=2).method_inputs[-5:] == (
+        "vo_land_horizon", "vo_land_margin", "land_lookahead", "channel_width", "bank_clearance")
 
 
 def test_the_velocity_obstacle_keeps_off_the_narrow_channel_walls():

@@ -33,8 +33,9 @@ import functools
 import casadi as ca
 import numpy as np
 
-from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, SHIP_PARAMS, Layout
-from mmg_casadi.closed_loop.step import _ROW, ENVELOPE, NAUX, _models, _ship_update, meet, ship_kinematics
+from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, SHIP_PARAMS, STOPPED, Layout
+from mmg_casadi.closed_loop.step import (_ROW, ENVELOPE, NAUX, _models, _ship_update, meet, ship_kinematics,
+                                         stop_function)
 from mmg_casadi.guidance.methods import forget_on_unregister
 from mmg_casadi.vessel.library import pair_collision_distance
 
@@ -249,11 +250,11 @@ def build_fleet_step(layout: Layout) -> ca.Function:
                        ca.vertcat(obs[0:2, :], ca.MX.ones(1, S), ca.MX.zeros(1, S)), ca.DM([FAR, FAR, 0.0, 0.0]))
     NB4 = _gather(after, nbr, 4)
     running = t < p[GLOBAL_PARAMS.index("t_max")] - 1e-9
-    counts = ca.logic_and(shared[4, :], running)
+    counts = ca.logic_and(ca.logic_and(shared[4, :], running), X[layout.column("status"), :] != STOPPED)
     row = ca.Function.conditional(f"fleet_row_{key}", [f["keep"]], f["meet"])
     rows = row.map(N)(counts, X, SP, g, walls, t, new, NB4, nbr)
     r0, r1 = layout.column(_ROW[0]), layout.column(_ROW[-1]) + 1
-    X_next = ca.vertcat(new[:r0, :], rows, new[r1:, :])
+    X_next = stop_function(layout).map(N)(X, ca.vertcat(new[:r0, :], rows, new[r1:, :]))
     clock = ca.if_else(running, t + p[GLOBAL_PARAMS.index("dt")], t)
     return ca.Function(f"fleet_{key}", [x, p, nbr], [ca.vertcat(clock, ca.vec(X_next)), aux],
                        ["x", "p", "nbr"], ["x_next", "aux"])

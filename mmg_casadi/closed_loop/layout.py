@@ -32,7 +32,7 @@ SHIP_STATE = (
     "n_prop",       # propeller speed (rev/min), the engine's state
     "y_int",        # ILOS integrator state
     "idx",          # index of the waypoint being tracked (column of the path)
-    "status",       # 0 sailing, 1 reached its goal, 2 diverged
+    "status",       # 0 sailing, 1 reached its goal, 2 diverged, 3 stopped by a collision or grounding
     "t_goal",       # time the goal was reached (-1 before)
     "ce_int",       # ∫|δ| dt while sailing
     "mcte_int",     # ∫|y_e| dt while sailing
@@ -45,6 +45,10 @@ SHIP_STATE = (
     "x_best", "y_best",
     "reactive_time",  # time spent under reactive guidance
 )
+
+STOPPED = 3
+"""The ``status`` of a ship whose voyage a collision or grounding ended (:func:`mmg_casadi.closed_loop.step.stop_on_contact`):
+she is held where she touched, engine stopped and rudder amidships, and stays in the scene as a static hazard."""
 
 
 GLOBAL_PARAMS = (
@@ -69,6 +73,13 @@ COMMAND_ROWS = ("command_heading", "command_rpm")
 """State rows of a layout with commanded ships (:attr:`Layout.commanded`): the heading ordered (rad) and, with
 :attr:`Layout.command_rpm`, the propeller speed ordered (rev/min); every ship has them, the step carries them
 unchanged and only the commanded ships read them."""
+
+LAND_INPUTS = ("land_lookahead", "land_clearance")
+"""Step inputs of the land look-ahead (:mod:`mmg_casadi.guidance.land_ahead`), in layouts with land only."""
+
+FAIRWAY_INPUTS = ("channel_width", "bank_clearance")
+"""Step inputs of the Rule 9 lane (:mod:`mmg_casadi.guidance.fairway`), in layouts with walls or land and a method
+that keeps Rule 9 (``Method.rule9``) only."""
 
 ENV_INPUTS = ("V_c", "beta_c", "U_w", "psi_w", "crab")
 """Trailing numeric inputs of a disturbed step (:attr:`Layout.disturbed`): the model's disturbance ``env =
@@ -351,14 +362,17 @@ class Layout:
     @property
     def method_inputs(self) -> tuple[str, ...]:
         """Numeric step inputs of the methods this layout uses (the ``inputs`` of each
-        :class:`mmg_casadi.guidance.methods.Method`, then, with walls, its ``wall_inputs``, and with land
-        ``grounding_margin``; each once), after the others in the parameter vector."""
+        :class:`mmg_casadi.guidance.methods.Method`, then, with walls, its ``wall_inputs``; with land
+        ``grounding_margin`` and the look-ahead's :data:`LAND_INPUTS`; with walls and a method that keeps Rule 9,
+        :data:`FAIRWAY_INPUTS`; each once), after the others in the parameter vector."""
         used = set(self.methods)
         names = [k for n, m in methods.METHODS.items() if n in used for k in m.step_inputs]
         if self.n_walls:
             names += [k for n, m in methods.METHODS.items() if n in used for k in m.wall_inputs]
         if self.n_land:
-            names.append("grounding_margin")
+            names += ["grounding_margin", *LAND_INPUTS]
+        if self.n_walls and any(methods.METHODS[n].rule9 for n in used if n in methods.METHODS):
+            names += [*LAND_INPUTS[:1], *FAIRWAY_INPUTS]
         return tuple(dict.fromkeys(names))
 
     @property
@@ -613,7 +627,8 @@ def step_values(resolved: dict) -> dict:
     for m in methods.METHODS.values():
         for name in m.step_inputs + m.wall_inputs:
             out[name] = math.radians(float(resolved[name + "_deg"])) if name not in resolved else float(resolved[name])
-    for name in ("engine_rate_rpm_s", "engine_lag_s", "engine_dead_slow", "engine_rpm_max", "grounding_margin"):
+    for name in ("engine_rate_rpm_s", "engine_lag_s", "engine_dead_slow", "engine_rpm_max", "grounding_margin",
+                 *LAND_INPUTS, *FAIRWAY_INPUTS):
         out[name] = float(resolved[name])
     return out
 

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from mmg_casadi.closed_loop.layout import SHIP_STATE, Layout
+from mmg_casadi.closed_loop.layout import SHIP_STATE, STOPPED, Layout
 from mmg_casadi.closed_loop.state import ship_rows
 from mmg_casadi.guidance import hazards
 
@@ -20,11 +20,15 @@ S_ = {name: i for i, name in enumerate(SHIP_STATE)}
 RUN_FAILURES = ("collision", "grounding", "timeout", "diverged", "stalled")
 """How a run fails (:func:`run_outcome`); ``""`` when it succeeds."""
 
-OUTCOMES = ("reached", "diverged", "stalled", "timeout")
-"""A ship's outcome: reached its goal, left the model envelope, made no progress (``stall_window``), or none."""
+OUTCOMES = ("reached", "diverged", "stalled", "timeout", "grounded", "collided")
+"""A ship's outcome: reached its goal, left the model envelope, made no progress (``stall_window``), none of
+these by the end, or her voyage ended by touching land (``grounded``) or a ship, an obstacle or a channel wall
+(``collided``; :data:`~mmg_casadi.closed_loop.layout.STOPPED`). A grounded or collided ship never reached her
+goal."""
 
 
-def ship_outcome(row, t_end: float, stall_window: float) -> tuple[str, tuple[float, float] | None]:
+def ship_outcome(row, t_end: float, stall_window: float, kind: str | None = None
+                 ) -> tuple[str, tuple[float, float] | None]:
     """Outcome of one ship from its final state row (:data:`SHIP_STATE`) — the one judgement every runner uses.
 
     Returns the outcome (one of :data:`OUTCOMES`) and, for ``"stalled"``, the position closest to the goal.
@@ -37,6 +41,9 @@ def ship_outcome(row, t_end: float, stall_window: float) -> tuple[str, tuple[flo
         End time of the run (L/U).
     stall_window : float
         A ship that has not come closer to its goal for this long is stalled (L/U).
+    kind : str, optional
+        What she first touched (:func:`collision_kind`), for a ship whose voyage a contact ended: ``"land"``
+        makes her ``"grounded"``, anything else ``"collided"``.
 
     Returns
     -------
@@ -53,12 +60,16 @@ def ship_outcome(row, t_end: float, stall_window: float) -> tuple[str, tuple[flo
     >>> row[S_["status"]] = 0; row[S_["t_best"]] = 20.0; row[S_["x_best"]] = 3.0
     >>> ship_outcome(row, 300.0, 50.0)
     ('stalled', (3.0, 0.0))
+    >>> row[S_["status"]] = STOPPED; ship_outcome(row, 300.0, 50.0, "land")
+    ('grounded', None)
     """
     status = row[S_["status"]]
     if status == 1:
         return "reached", None
     if status == 2:
         return "diverged", None
+    if status == STOPPED:
+        return ("grounded" if kind == "land" else "collided"), None
     if t_end - row[S_["t_best"]] >= stall_window:
         return "stalled", (float(row[S_["x_best"]]), float(row[S_["y_best"]]))
     return "timeout", None
@@ -69,8 +80,9 @@ def voyage_metrics(rows: np.ndarray, t_end: float, delta_max: float) -> tuple[np
 
     ``CE = ∫|δ| dt / (δ_max T)`` (eq. (controller_effort_equation)) and ``MCTE = ∫|y_e| dt / T`` (eq.
     (crosstrack_metric_equation)) with the integrals accumulated by the compiled step while the ship sails
-    (trapezoidal in δ, the cross-track error sampled at each step's start) and ``T`` the time to goal, or the
-    end time for a ship still sailing; ``nan`` for a diverged ship (its voyage time is not in the state).
+    (trapezoidal in δ, the cross-track error sampled at each step's start) and ``T`` the time to goal, the time
+    of the collision or grounding that ended her voyage, or the end time for a ship still sailing; ``nan`` for a
+    diverged ship (its voyage time is not in the state).
 
     Parameters
     ----------
@@ -98,7 +110,8 @@ def voyage_metrics(rows: np.ndarray, t_end: float, delta_max: float) -> tuple[np
     """
     rows = np.atleast_2d(np.asarray(rows, float))
     status = rows[:, S_["status"]]
-    T = np.where(status == 1, rows[:, S_["t_goal"]], np.where(status == 0, t_end, np.nan))
+    T = np.where(status == 1, rows[:, S_["t_goal"]], np.where(status == 0, t_end, np.where(
+        status == STOPPED, rows[:, S_["t_collision"]], np.nan)))
     with np.errstate(invalid="ignore", divide="ignore"):
         T = np.where(T > 0, T, np.nan)
         return rows[:, S_["ce_int"]] / (delta_max * T), rows[:, S_["mcte_int"]] / T
@@ -164,8 +177,9 @@ def ship_outcomes(layout: Layout, x_final, params: dict) -> list[dict]:
     ce, mcte = voyage_metrics(rows, t_end, math.radians(params["delta_max_deg"]))
     out = []
     for i, row in enumerate(rows):
-        status, where = ship_outcome(row, t_end, float(params["stall_window"]))
         t_col = float(row[S_["t_collision"]])
+        kind = collision_kind(layout, int(row[S_["collision_with"]])) if t_col >= 0 else None
+        status, where = ship_outcome(row, t_end, float(params["stall_window"]), kind)
         d_min = float(row[S_["d_min"]])
         out.append({
             "status": status, "stalled_at": where,
@@ -174,7 +188,7 @@ def ship_outcomes(layout: Layout, x_final, params: dict) -> list[dict]:
             "ce": float(ce[i]), "mcte": float(mcte[i]),
             "collision_time": t_col if t_col >= 0 else None,
             "collision_with": int(row[S_["collision_with"]]) if t_col >= 0 else None,
-            "collision_kind": collision_kind(layout, int(row[S_["collision_with"]])) if t_col >= 0 else None,
+            "collision_kind": kind,
             "min_distance": d_min if d_min < 1e5 else None,
             "min_distance_with": int(row[S_["d_min_with"]]) if d_min < 1e5 else None,
             "reactive_time": float(row[S_["reactive_time"]]),

@@ -11,7 +11,11 @@ A method (:mod:`mmg_casadi.guidance.methods`) returns a :class:`~mmg_casadi.guid
 desired-heading vector and, optionally, a propeller speed, which the engine
 (:func:`~mmg_casadi.vessel.actuators.engine_step`) follows at its rate; a method that commands no speed keeps the
 ship's service propeller speed, exactly. Hazards (:mod:`mmg_casadi.guidance.hazards`): circular obstacles are
-neighbours of the methods; walls add their field to every method's vector; touching either is a collision.
+neighbours of the methods; walls add their field to every method's vector; touching either is a collision. Land
+is seen ahead (:mod:`mmg_casadi.guidance.land_ahead`): in layouts with land a method is in charge while the
+ship's path ahead reaches it, and a method without a land test of its own gets the paper's wall source at the
+point of land met. A method that keeps Rule 9 (``Method.rule9``) follows the starboard lane of a narrow channel
+(:mod:`mmg_casadi.guidance.fairway`). A collision or grounding ends that ship's voyage (:func:`stop_on_contact`).
 
 Current and wind (table group "environment", :mod:`mmg_casadi.vessel.environment`): a layout with either (or with
 crab-angle compensation) is ``Layout.disturbed`` and its step takes
@@ -29,16 +33,19 @@ reactive methods' desired heading is not crab-compensated, and gusts
 from __future__ import annotations
 
 import functools
+import math
 
 import casadi as ca
 
-from mmg_casadi.closed_loop.layout import COMMAND_ROWS, Layout
+from mmg_casadi.closed_loop.layout import COMMAND_ROWS, STOPPED, Layout
 from mmg_casadi.closed_loop.neighbours import dispatch_args, within_range
 from mmg_casadi.closed_loop.replay import replay_update
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.guidance import hazards, methods
+from mmg_casadi.guidance import fairway, hazards, methods
 from mmg_casadi.guidance.heading_control import pd_heading
-from mmg_casadi.guidance.ilos import ilos_step_terms, limit_turn, switch_waypoint
+from mmg_casadi.guidance.ilos import (ilos_heading, ilos_integrator_rate, ilos_step_terms, limit_turn,
+                                      switch_waypoint)
+from mmg_casadi.guidance.land_ahead import hull_advance, land_ahead_function, land_source
 from mmg_casadi.guidance.methods import GuidanceInputs, command_from_vector, forget_on_unregister
 from mmg_casadi.vessel import environment
 from mmg_casadi.vessel.actuators import engine_step
@@ -135,7 +142,7 @@ def _own_time(layout: Layout, vessel: str, r):
 
 def ship_kinematics(Xi, S_: dict, E, stays):
     """One ship's position, velocity over the ground (through the water plus the current ``E`` when disturbed)
-    and presence as an obstacle: while sailing, or after its goal if it ``stays``; a diverged ship is removed.
+    and presence as an obstacle.
 
     Parameters
     ----------
@@ -155,14 +162,16 @@ def ship_kinematics(Xi, S_: dict, E, stays):
     vel : casadi.SX (2, 1)
         Earth-fixed velocity over the ground (U_des units).
     present : casadi.SX
-        1 if the ship counts as an obstacle, else 0.
+        1 if the ship counts as an obstacle, else 0: while she sails, after her goal if she ``stays``, and held
+        where she stopped after a collision or grounding (:data:`STOPPED`); a diverged ship is removed.
     """
     u, v, psi, status = Xi[S_["u"]], Xi[S_["v"]], Xi[S_["psi"]], Xi[S_["status"]]
     if E is None:
         vel = ca.vertcat(u * ca.cos(psi) - v * ca.sin(psi), u * ca.sin(psi) + v * ca.cos(psi))
-    else:  # u, v are through the water; guidance sees velocities over the ground
-        vel = ca.vertcat(*environment.velocity_over_ground(u, v, psi, E[0], E[1]))
-    present = ca.if_else(status == 0, 1, ca.if_else(status == 1, stays, 0))
+    else:  # u, v are through the water; guidance sees velocities over the ground; a stopped ship is held
+        vel = ca.if_else(status == STOPPED, ca.SX.zeros(2, 1),
+                         ca.vertcat(*environment.velocity_over_ground(u, v, psi, E[0], E[1])))
+    present = ca.if_else(status == 0, 1, ca.if_else(status == 1, stays, ca.if_else(status == STOPPED, 1, 0)))
     return ca.vertcat(Xi[S_["x"]], Xi[S_["y"]]), vel, present
 
 
@@ -209,6 +218,12 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     method = method or layout.methods[i]
     terms = ilos_step_terms(pos[i], Pi["path"], Xi[S_["idx"]], Xi[S_["y_int"]], P["ilos_delta"], P["ilos_k"])
     goal = terms["wp_next"]
+    spec = methods.get(method or layout.methods[i], f"methods[{i}]")
+    vessel = vessel or layout.vessel(i)
+    commanded = i in layout.commanded and nb is None
+    goal_seen, y_int_rate = goal, terms["y_int_dot"]  # the goal the method steers for; ILOS's integral rate
+    if spec.rule9 and W and not commanded:  # Rule 9: ILOS and the method follow the starboard lane of a channel
+        terms, goal_seen, y_int_rate = _lane(layout, terms, pos[i], Xi[S_["y_int"]], walls, P, vessel)
     if nb is None:
         others = [j for j in range(N) if j != i]
         nb_pos = ca.horzcat(*[pos[j] for j in others], obs[0:2, :]) if (others or S) else ca.SX(2, 0)
@@ -225,7 +240,7 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         active = ca.SX(1, 0)
 
     psi_ilos = terms["psi_d"]
-    spec = methods.get(method, f"methods[{i}]")
+    method = method or layout.methods[i]
     look = active  # the neighbours the method gets as active: within R_safe, plus its lookout if it has one
     if spec.lookout and M:
         look = nb_present * _indicator(P["r_safe"] + P[spec.lookout] - d_nb, sm)
@@ -247,8 +262,10 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         # that arrives off her track could circle a waypoint that lies inside her moderate turning circle for ever
         lim = ca.if_else(ca.norm_2(goal - pos[i]) > P["r_safe"], P[spec.turn_limit], ca.pi)
         psi_ilos = limit_turn(psi[i], psi_ilos, lim)
+    land = None  # land seen ahead (layouts with land): the method is in charge while the path ahead reaches it
+    if layout.n_land and spec.builder is not None and not commanded:
+        land = _land_ahead(layout, pos[i], vel[i], psi[i], psi_ilos, walls, Pi, P, vessel)
     cmd = None  # the method's command, and whether a neighbour is within R_safe
-    commanded = i in layout.commanded and nb is None
     if commanded:  # steered from outside: the heading ordered in the state (Layout.commanded)
         psi_d = Xi[S_["command_heading"]]
         w_react = ca.SX(1)
@@ -266,9 +283,13 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         if W:
             wall_vec = hazards.KINDS["wall"].field(pos[i], walls, P)
             near_wall = _indicator(ca.sumsqr(wall_vec) - 1e-12, sm)
+        if land is not None and not spec.tests_land:  # the paper's wall source at the point of land met, from afar
+            wall_vec = wall_vec + land["ahead"] * land_source(pos[i], land["point"], P["wall_lam"])
         w_react = _either(any_active, near_wall, sm)
+        if land is not None:
+            w_react = _either(w_react, land["ahead"], sm)
         speed = ca.norm_2(vel[i]) if layout.disturbed else ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2)
-        inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal,
+        inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal_seen,
                                 nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=look, P=P,
                                 layout=layout, memory={k: Xi[S_[k]] for k in spec.memory},
                                 service_rpm=n_service, walls=walls if W else None,
@@ -292,7 +313,7 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
             e = w_react * e_f + (1 - w_react) * ca.vertcat(ca.cos(psi_ilos), ca.sin(psi_ilos))
             psi_d = ca.atan2(e[1], e[0])
 
-    r_own = _own_time(layout, vessel or layout.vessel(i), Xi[S_["r"]])
+    r_own = _own_time(layout, vessel, Xi[S_["r"]])
     delta_c = pd_heading(psi[i], psi_d, r_own, P["kp"], P["kd"], P["delta_max"])
     n_c = n_service  # the leg's propeller speed, unless the method in charge commands another
     if commanded and layout.command_rpm:
@@ -305,7 +326,7 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     xm_next = rk4(mmg, xm, (delta_c, n_prop, *c["env_args"]), dt / n_sub)
     for _ in range(n_sub - 1):
         xm_next = rk4(mmg, xm_next, (delta_c, n_prop, *c["env_args"]), dt / n_sub)
-    y_int_next = Xi[S_["y_int"]] + dt * terms["y_int_dot"] * (1 - w_react)
+    y_int_next = Xi[S_["y_int"]] + dt * y_int_rate * (1 - w_react)
     pos_next = ca.vertcat(xm_next[S_["x"]], xm_next[S_["y"]])
     idx_next, reached = switch_waypoint(pos_next, Pi["path"], Xi[S_["idx"]], Pi["n_path"], P["goal_tolerance"])
     if spec.goal_capture:
@@ -354,16 +375,88 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     return new, ca.vertcat(delta_c, psi_d, terms["y_e"], w_react)
 
 
+def _lookahead(layout: Layout, P: dict, vessel: str):
+    """The land look-ahead distance of a ship of ``vessel`` (L): ``land_lookahead`` advances of her hull."""
+    return P["land_lookahead"] * hull_advance(vessel, layout.unit_vessel())
+
+
+def _land_ahead(layout: Layout, pos, vel, psi, psi_ilos, walls, Pi: dict, P: dict, vessel: str) -> dict:
+    """Land seen ahead by one ship (:func:`~mmg_casadi.guidance.land_ahead.land_seen_ahead`): her straight path
+    over the look-ahead distance along her course over the ground (her heading when she hardly moves) or along
+    the heading ILOS orders, against the land edges (the last ``n_land`` wall segments) with the clearance half
+    her beam + ``grounding_margin`` + ``land_clearance``; the point of land met is her course's, else ILOS's."""
+    speed = ca.norm_2(vel)
+    course = ca.if_else(speed > 1e-6, vel / ca.fmax(speed, 1e-6), ca.vertcat(ca.cos(psi), ca.sin(psi)))
+    clearance = Pi["half_beam"] + P["grounding_margin"] + P["land_clearance"]
+    reach, land = _lookahead(layout, P, vessel), walls[:, layout.n_walls - layout.n_land:]
+    now, p_now, ordered, p_ordered = land_ahead_function(layout.n_land)(
+        pos, course, ca.vertcat(ca.cos(psi_ilos), ca.sin(psi_ilos)), reach, clearance, land)
+    return {"ahead": ca.logic_or(now, ordered), "point": ca.if_else(now, p_now, p_ordered)}
+
+
+def _lane(layout: Layout, terms: dict, pos, y_int, walls, P: dict, vessel: str):
+    """ILOS's terms, the goal a method steers for and ILOS's integral rate along the starboard lane of a narrow
+    channel (Rule 9, :func:`~mmg_casadi.guidance.fairway.lane`): in a channel the lane error replaces the route's
+    cross-track error (``y_e`` itself, the MCTE's, stays the route's) and the goal is moved onto the direction ILOS
+    takes to the lane, at its own distance."""
+    lane = fairway.lane(pos, terms["pi_p"], walls, width=P["channel_width"], clearance=P["bank_clearance"],
+                        ahead=_lookahead(layout, P, vessel),
+                        first_land=layout.n_walls - layout.n_land if layout.n_land else None)
+    inside = lane["in_channel"]
+    e_max = P["ilos_delta"] * math.tan(math.radians(fairway.APPROACH_DEG))
+    e = ca.if_else(inside, ca.fmin(ca.fmax(lane["error"], -e_max), e_max), terms["y_e"])
+    psi_d = ilos_heading(terms["pi_p"], e, y_int, P["ilos_delta"], P["ilos_k"])
+    rate = ilos_integrator_rate(e, y_int, P["ilos_delta"], P["ilos_k"])
+    psi_lane = terms["pi_p"] - ca.atan(e / P["ilos_delta"])  # towards the lane, without the integral
+    reach = ca.norm_2(terms["wp_next"] - pos)
+    goal = ca.if_else(inside, pos + reach * ca.vertcat(ca.cos(psi_lane), ca.sin(psi_lane)), terms["wp_next"])
+    return {**terms, "psi_d": ca.if_else(inside, psi_d, terms["psi_d"])}, goal, \
+        ca.if_else(inside, rate, terms["y_int_dot"])
+
+
 def _bookkeeping(layout: Layout, c: dict, x_next: list):
     """The next scenario state: closest approach and first collision, from the positions after the step, for
-    every pair present at its start, and the clock."""
+    every pair present at its start; a ship whose first collision or grounding happened in the step stops
+    (:func:`stop_on_contact`); and the clock."""
     S_ = c["S"]
     out = []
     for i in range(layout.n_ships):
         xn = x_next[i]
         xn = ca.vertcat(xn[:S_["d_min"]], _encounter_row(layout, c, x_next, i), xn[S_["collision_with"] + 1:])
-        out.append(xn)
+        out.append(stop_on_contact(layout, c["X"][i], xn))
     return ca.vertcat(ca.if_else(c["running"], c["t"] + c["P"]["dt"], c["t"]), *out)
+
+
+STOP_ROWS = {"u": 0.0, "v": 0.0, "r": 0.0, "delta": 0.0, "n_prop": 0.0, "status": float(STOPPED), "t_goal": -1.0}
+"""The rows a collision or grounding sets: the ship is held (no speed, no yaw rate), rudder amidships, engine
+stopped, status :data:`~mmg_casadi.closed_loop.layout.STOPPED`, goal not reached."""
+
+
+def stop_on_contact(layout: Layout, before, after):
+    """One ship's rows after a step, stopped if her first collision or grounding happened in it.
+
+    Her voyage ends where she touched: the model has no contact forces, so drifting on with the engine stopped
+    would carry a grounded hull through the land and two collided hulls through each other; the ground (or the
+    other hull) holds her. She stays in the scene as a static hazard the other ships must avoid (a ship aground
+    or disabled by a collision is one), with the rows :data:`STOP_ROWS`; a stopped ship is not sailing, so the
+    step holds her state from then on.
+
+    Parameters
+    ----------
+    layout : Layout
+        The closed loop's shape (names of the ship's rows).
+    before, after : SX or MX
+        The ship's rows (``layout.ns``) at the start of the step and after it (with its encounter rows).
+
+    Returns
+    -------
+    SX or MX
+        ``after``, with :data:`STOP_ROWS` where ``t_collision`` became set in the step.
+    """
+    col = layout.column("t_collision")
+    hit = ca.logic_and(after[col] >= 0, before[col] < 0)
+    rows = {layout.column(k): v for k, v in STOP_ROWS.items()}
+    return ca.vertcat(*[ca.if_else(hit, rows[k], after[k]) if k in rows else after[k] for k in range(layout.ns)])
 
 
 _ROW = ("d_min", "d_min_with", "t_collision", "collision_with")
@@ -383,11 +476,12 @@ def _encounter_row(layout: Layout, c: dict, x_next: list, i: int):
     d_min, d_with = xn[S_["d_min"]], xn[S_["d_min_with"]]
     t_col, c_with = xn[S_["t_collision"]], xn[S_["collision_with"]]
     ell = P["ships"][i]["length"]
+    sails = ca.logic_and(present[i], c["X"][i][S_["status"]] != STOPPED)  # a stopped ship's rows are final
     agents = [(j, pos_n[j], present[j], pair_collision_distance(P["collision_distance"], ell,
                                                                   P["ships"][j]["length"]))
               for j in range(N) if j != i]
     agents += [(N + k, obs[0:2, k], ca.SX(1), P["collision_distance"]) for k in range(S)]
-    return meet(layout, P, pos_n[i], (d_min, d_with, t_col, c_with), present[i], running, t, agents,
+    return meet(layout, P, pos_n[i], (d_min, d_with, t_col, c_with), sails, running, t, agents,
                 P["ships"][i]["half_beam"])
 
 
@@ -458,7 +552,8 @@ def _sparse_functions(layout: Layout, n_sub: int) -> tuple[ca.Function, ca.Funct
     xs, ps = ca.SX.sym("x", layout.nx), ca.SX.sym("p", layout.np)
     c = _step_context(layout, xs, ps)
     shared = ca.vertcat(*[ca.vertcat(c["pos"][i], c["vel"][i], c["present"][i]) for i in range(N)])
-    counted = [ca.logic_and(c["present"][i], c["running"]) for i in range(N)]
+    counted = [ca.logic_and(ca.logic_and(c["present"][i], c["running"]), c["X"][i][c["S"]["status"]] != STOPPED)
+               for i in range(N)]
     pre = ca.Function(f"pre_{key}", [xs, ps], [shared, ca.vertcat(*c["sailing"]), ca.vertcat(*counted)],
                       {"cse": True})
     sh = ca.SX.sym("shared", 5 * N)
@@ -482,18 +577,36 @@ def _sparse_functions(layout: Layout, n_sub: int) -> tuple[ca.Function, ca.Funct
     nxt_mx = ca.vertcat(*news)
     r0, r1 = layout.column(_ROW[0]), layout.column(_ROW[-1]) + 1
     clock = ca.Function(f"clock_{key}", [xs, ps], [ca.if_else(c["running"], c["t"] + c["P"]["dt"], c["t"])])
+    stop = stop_function(layout)
     rows = [clock(x, p)]
     for i in range(N):
         update = ca.Function(f"meet{i}_{key}", [xs, ps, nxt], [_encounter_row(layout, c, rows_next, i)],
                              {"cse": True})
         keep = ca.Function(f"keep{i}_{key}", [xs, ps, nxt], [rows_next[i][r0:r1]])
         row = ca.Function.conditional(f"row{i}_{key}", [keep], update)(counts[i], x, p, nxt_mx)
-        rows += [news[i][:r0], row, news[i][r1:]]
+        rows.append(stop(x[layout.ship_block(i)], ca.vertcat(news[i][:r0], row, news[i][r1:])))
     step = ca.Function(f"closed_loop_{key}", [x, p], [ca.vertcat(*rows), ca.horzcat(*auxs)],
                        ["x", "p"], ["x_next", "aux"])
     guidance = ca.Function(f"guidance_{key}", [x, p], [ca.horzcat(*rudders)], ["x", "p"], ["delta_c"])
     return step, guidance
 
+
+
+def stop_function(layout: Layout) -> ca.Function:
+    """:func:`stop_on_contact` as a Function of one ship's rows.
+
+    Parameters
+    ----------
+    layout : Layout
+        The closed loop's shape.
+
+    Returns
+    -------
+    casadi.Function
+        ``stop_<key>(before, after) -> after``, each ``layout.ns`` rows.
+    """
+    b, a = ca.SX.sym("before", layout.ns), ca.SX.sym("after", layout.ns)
+    return ca.Function(f"stop_{layout.key()}", [b, a], [stop_on_contact(layout, b, a)], {"cse": True})
 
 
 def _check_sparse(layout: Layout) -> None:

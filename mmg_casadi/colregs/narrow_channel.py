@@ -5,14 +5,16 @@ limit of the channel or fairway which lies on her starboard side as is safe and 
 
 **Narrow channel** (ours; the COLREGs define none). At a sample, a ship is *in a narrow channel* when the line
 through her centre perpendicular to her heading meets a wall or land edge on each side, at ``d_port`` to port and
-``d_stbd`` to starboard, and the channel there, ``d_port + d_stbd``, is at most :data:`CHANNEL_WIDTH` wide: a
+``d_stbd`` to starboard, and the channel there, ``d_port + d_stbd``, is at most the profile's ``rule9_width`` wide
+(20 L; :class:`~mmg_casadi.colregs.profiles.ScoringProfile`): a
 channel is water with banks (walls or land) on both sides across her track, so open water and a single coast
 are not. The channel's centre line at that cross-section is the midpoint between the banks; the ship is on the
 starboard side of it *for her direction of travel* when her offset ``(d_port − d_stbd) / 2`` is positive (the
 starboard bank is the nearer).
 
 **Score and verdict.** The score is the share of the ship's time in a narrow channel (while she sails) spent on the
-starboard side of the centre line; the rule is kept when the share is at least :data:`KEPT_SHARE`. A ship that is
+starboard side of the centre line; the rule is kept when the share is at least the profile's ``rule9_kept_share``
+(0.9). A ship that is
 never in a narrow channel has no Rule 9 verdict (``None``).
 
 Examples
@@ -36,18 +38,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from mmg_casadi.colregs.profiles import scoring_profile
 from mmg_casadi.colregs.verdict import RuleResult
-
-CHANNEL_WIDTH = 20.0
-"""Widest channel (L, bank to bank across the ship's track) that counts as narrow. Our choice: the COLREGs leave
-"narrow" to the circumstances (Cockcroft & Lameijer, on Rule 9: a channel that a ship can navigate only within
-its limits); 20 L includes the paper's 10 L channel, environment 6's straits (8-16 L) and the fjord's 6 L
-channels, and excludes water wider than the 2 × R_safe (30 L) across which the guidance sees both banks."""
-
-KEPT_SHARE = 0.9
-"""Least share of the time in a narrow channel on the starboard side for Rule 9(a) to count as kept. Our choice:
-most of the passage, leaving room for the brief excursions that overtaking (Rule 9(e)) and the avoidance of a ship
-or an obstacle demand."""
 
 _PARALLEL = 1e-12
 
@@ -88,7 +80,7 @@ def channel_sides(xy, psi, segments):
     return d_port, d_stbd
 
 
-def rule9(t, xy, psi, active, segments, *, width=CHANNEL_WIDTH, kept_share=KEPT_SHARE):
+def rule9(t, xy, psi, active, segments, *, profile=None):
     """Rule 9(a) verdict of one ship: the share of her time in a narrow channel on its starboard side.
 
     Parameters
@@ -103,10 +95,10 @@ def rule9(t, xy, psi, active, segments, *, width=CHANNEL_WIDTH, kept_share=KEPT_
         Whether the ship sails at each sample.
     segments : sequence of ((ax, ay), (bx, by))
         Walls and land edges of the scenario (L).
-    width : float, default :data:`CHANNEL_WIDTH`
-        Widest channel that counts as narrow (L).
-    kept_share : float, default :data:`KEPT_SHARE`
-        Least starboard share for the rule to be kept.
+    profile : str or ScoringProfile, optional
+        The scoring profile (:func:`~mmg_casadi.colregs.profiles.scoring_profile`; default ``published``): its
+        ``rule9_width`` is the widest channel that counts as narrow (L), its ``rule9_kept_share`` the least
+        starboard share for the rule to be kept.
 
     Returns
     -------
@@ -116,6 +108,8 @@ def rule9(t, xy, psi, active, segments, *, width=CHANNEL_WIDTH, kept_share=KEPT_
         ``share``, ``mean_offset`` (L, time-weighted mean offset from the centre line, > 0 to starboard) and
         ``min_width`` (L, the narrowest cross-section met).
     """
+    p = scoring_profile(profile)
+    width, kept_share = p.rule9_width, p.rule9_kept_share
     t = np.asarray(t, float).ravel()
     if t.size < 2 or not len(segments):
         return None

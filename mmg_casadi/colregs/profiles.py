@@ -150,6 +150,16 @@ class ScoringProfile:
         Rule 13(d): an overtaking lasts until the overtaking ship is finally past and clear, the range opening
         beyond this (L); a later risk of the pair before then belongs to the same encounter, with its roles
         (None: the encounter ends at its release).
+    rule9_width : float
+        Rule 9(a): the widest channel or fairway (L, bank to bank across the ship's track) that counts as narrow
+        (:mod:`mmg_casadi.colregs.narrow_channel`). 20 L in every profile, ours: the COLREGs leave "narrow" to the
+        circumstances (Cockcroft & Lameijer, on Rule 9: a channel that a ship can navigate only within its
+        limits); 20 L includes the paper's 10 L channel, environment 6's straits (8-16 L) and the fjord's 6 L
+        channels, and excludes water wider than the 2 × R_safe (30 L) across which the guidance sees both banks.
+    rule9_kept_share : float
+        Rule 9(a) is kept when at least this share of the ship's time in a narrow channel is on its starboard side.
+        0.9 in every profile, ours: most of the passage, leaving room for the brief excursions that overtaking
+        (Rule 9(e)) and the avoidance of a ship or an obstacle demand.
 
     Examples
     --------
@@ -209,6 +219,8 @@ class ScoringProfile:
     w_pose_beta: float = 0.75
     pose_cut_deg: float = 90.0
     past_clear: float | None = None
+    rule9_width: float = 20.0
+    rule9_kept_share: float = 0.9
 
     def __post_init__(self):
         for key in ("d_risk", "t_risk", "r_risk", "d_ahead", "late_tcpa", "late_range", "must_tcpa", "must_range"):
@@ -250,6 +262,8 @@ class ScoringProfile:
         check_range("pose_cut_deg", self.pose_cut_deg, 0.0, 180.0, low_open=True, unit="degrees")
         if self.past_clear is not None:
             check_range("past_clear", self.past_clear, 0.0, None, low_open=True)
+        check_range("rule9_width", self.rule9_width, 0.0, None, low_open=True, unit="L")
+        check_range("rule9_kept_share", self.rule9_kept_share, 0.0, 1.0)
 
     @property
     def must_distance(self) -> float:

@@ -89,8 +89,11 @@ The own ship's *planned course* is the bearing of its next waypoint at its curre
   their sum out of the way of whatever is close.
 - **Land** (layouts with walls or land only): the close-quarters filter and the stand-on action also treat a
   heading whose straight path at the present speed reaches a wall or land edge within ``vo_land_horizon`` as
-  inadmissible (:func:`~mmg_casadi.guidance.velocity_obstacle.land_blocked`), so the side the ship turns to is
-  one with water; the filter then applies while the method is in charge, whether or not a ship is close.
+  inadmissible (:func:`~mmg_casadi.guidance.land_test.land_blocked`), so the side the ship turns to is
+  one with water; the filter then applies while the method is in charge, whether or not a ship is close (the
+  closed loop puts it in charge while land is ahead, :mod:`mmg_casadi.guidance.land_ahead`). With no ship within
+  close quarters the heading it then takes is the admissible one closest to the field's (land alone has no
+  Rule 8 side), with a ship within close quarters the one closest to a readily apparent starboard alteration.
 
 Everything is branch-free CasADi (0/1 products and ``if_else``); the memory is
 :data:`~mmg_casadi.guidance.colregs_encounters.MEMORY` (:func:`colregs_vortex_command`). The exact switches are
@@ -111,11 +114,10 @@ from mmg_casadi.guidance.colregs_encounters import (ACTING, GIVE_WAY, HEAD_ON, M
                                                     STAND_ON, classify_role, gives_way, open_encounters, recall,
                                                     remember, slots_of)
 from mmg_casadi.guidance.ilos import limit_turn, wrap_angle
+from mmg_casadi.guidance.colregs_giveway import FLOOR_STEP, _cpa, _crosses_ahead, giveway_floor  # noqa: F401
 from mmg_casadi.guidance.velocity_obstacle import heading_feasible, velocity_obstacle
 
 _BIG = 1.0e6
-FLOOR_STEP = math.radians(10.0)
-"""Step between the candidate alterations of :func:`giveway_floor` (rad, 10°)."""
 
 
 @dataclass(frozen=True)
@@ -245,98 +247,6 @@ class ColregsVortexParams:
         ['d_att_floor', 'd_clear', 'd_cpa_act']
         """
         return {f.name: getattr(self, f.name) for f in dc_fields(self)}
-
-
-def _cpa(rel_pos, rel_vel):
-    """TCPA (1×M, negative when opening) and the relative position at the CPA (2×M, for TCPA clipped at 0)."""
-    vv = ca.fmax(ca.sum1(rel_vel * rel_vel), 1e-9)
-    tcpa = -ca.sum1(rel_pos * rel_vel) / vv
-    p_cpa = rel_pos + rel_vel * ca.repmat(ca.fmax(tcpa, 0), 2, 1)
-    return tcpa, p_cpa
-
-
-def _crosses_ahead(los, nb_vel, v_own):
-    """1 where the own ship, sailing at ``v_own``, would cross the neighbour's course line ahead of her (1×M)."""
-    m = los.size2()
-    speed_nb = ca.sqrt(ca.sum1(nb_vel * nb_vel))
-    h = nb_vel / ca.repmat(ca.fmax(speed_nb, 1e-9), 2, 1)
-    rel = -los  # own position relative to the neighbour
-    side = h[0, :] * rel[1, :] - h[1, :] * rel[0, :]
-    v = ca.repmat(v_own, 1, m)
-    rate = h[0, :] * v[1, :] - h[1, :] * v[0, :]  # d(side)/dt (her own motion is along the line)
-    t_x = -side / ca.if_else(ca.fabs(rate) > 1e-9, rate, 1e-9)
-    along = ca.sum1(h * rel) + t_x * (ca.sum1(h * v) - speed_nb)
-    return (t_x > 0) * (along > 0) * (ca.fabs(rate) > 1e-9)
-
-
-def giveway_floor(own_pos, speed, ref, nb_pos, nb_vel, duty, *, dpsi_min, d_risk):
-    """Smallest alteration to starboard of ``ref``, from ``dpsi_min`` in :data:`FLOOR_STEP` steps up to 90°, whose
-    straight-line passing distance (own ship at ``speed``, neighbours at ``nb_vel``) to every neighbour with
-    ``duty`` 1 is at least ``d_risk`` (a neighbour already past its CPA counts as clear); if none is, the
-    candidate whose passing distance is the widest (Rule 16: the give-way ship's action alone removes the risk of
-    collision, or comes as near to it as a course change can).
-
-    Parameters
-    ----------
-    own_pos : array_like
-        Own position (2×1, L).
-    speed : float or casadi.SX
-        Own speed (L/unit time).
-    ref : float or casadi.SX
-        Heading the alteration is measured from (rad): the heading at the onset of the duty.
-    nb_pos, nb_vel : array_like
-        Neighbour positions and velocities (2×M, L and L/unit time).
-    duty : array_like
-        1×M, 1 for the neighbours the floor is judged against (head-on and crossing give-way duties).
-    dpsi_min : float or casadi.SX
-        The smallest alteration (rad, Rule 8's readily apparent one).
-    d_risk : float or casadi.SX
-        Passing distance that ends the risk of collision (L).
-
-    Returns
-    -------
-    casadi.DM or casadi.SX
-        The alteration (rad, to starboard of ``ref``).
-
-    Examples
-    --------
-    A ship 12 L ahead and 12 L to starboard crossing to port at the own speed, both heading for the same point:
-    altering 30° passes 4.4 L from her, 40° 5.8 L, 50° 7.2 L; with a 6 L passing distance the floor is 50°, and
-    with no duty it is the minimum itself. At 0.7 times the speed of a ship 2 L ahead and 12 L to starboard, no
-    alteration up to 90° passes at 4 L; 30° passes widest (3.1 L; 70° 0.3 L, 90° 2.0 L).
-
-    >>> import math, casadi as ca
-    >>> kw = dict(dpsi_min=math.radians(30), d_risk=6.0)
-    >>> pos, vel = ca.DM([[12], [12]]), ca.DM([[0], [-1]])
-    >>> round(math.degrees(float(giveway_floor([0, 0], 1.0, 0.0, pos, vel, [1], **kw))))
-    50
-    >>> round(math.degrees(float(giveway_floor([0, 0], 1.0, 0.0, pos, vel, [0], **kw))))
-    30
-    >>> kw["d_risk"] = 4.0
-    >>> round(math.degrees(float(giveway_floor([0, 0], 0.7, 0.0, ca.DM([[2], [12]]), vel, [1], **kw))))
-    30
-    """
-    own_pos = _col2(own_pos)
-    nb_pos, nb_vel = _matrix(nb_pos, 2), _matrix(nb_vel, 2)
-    m = nb_pos.size2()
-    duty = _row(duty, m)
-    los = nb_pos - ca.repmat(own_pos, 1, m)
-    steps = math.ceil((math.pi / 2) / FLOOR_STEP)  # enough steps to reach 90° from any dpsi_min >= 0
-    alterations, passing = [], []
-    for k in range(steps + 1):
-        dk = ca.fmin(dpsi_min + k * FLOOR_STEP, math.pi / 2)
-        v_k = speed * ca.vertcat(ca.cos(ref + dk), ca.sin(ref + dk))
-        tcpa, p_cpa = _cpa(los, nb_vel - ca.repmat(v_k, 1, m))
-        clear = (1 - duty) + duty * (tcpa <= 0)  # not judged, or already past the CPA
-        alterations.append(dk)
-        passing.append(ca.mmin(clear * _BIG + (1 - clear) * ca.sqrt(ca.sum1(p_cpa * p_cpa))))
-    # none passes at d_risk: the one that passes widest (the first of equals)
-    floor, widest = alterations[0], passing[0]
-    for dk, pk in zip(alterations[1:], passing[1:]):
-        floor, widest = ca.if_else(pk > widest, dk, floor), ca.fmax(pk, widest)
-    for dk, pk in zip(reversed(alterations), reversed(passing)):
-        floor = ca.if_else(pk >= d_risk, dk, floor)
-    return floor
 
 
 def _is(code, role):
@@ -524,7 +434,11 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
     dist_goal = ca.fmax(ca.sqrt(ca.sumsqr(to_goal)), R_MIN)
     psi_goal = ca.atan2(to_goal[1], to_goal[0])
     if m == 0:
-        return -lam_sink / (2 * ca.pi * dist_goal * dist_goal) * to_goal, ca.DM(1), None
+        sink = -lam_sink / (2 * ca.pi * dist_goal * dist_goal) * to_goal
+        if walls is None:
+            return sink, ca.DM(1), None
+        return _keep_off_land(own_pos, own_psi, own_vel, sink, dpsi_cq, n_candidates, walls, clearance,
+                              horizon), ca.DM(1), None
     active = _row(active, m)
     t = colregs_vortex_terms(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, k_vor0=k_vor0, r_safe=r_safe,
                              r_tol=r_tol, gamma_max=gamma_max, theta_head_on=theta_head_on, d_cpa_act=d_cpa_act,
@@ -601,6 +515,8 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
     ok = heading_feasible(own_pos, speed_now, psi_next, nb_pos, nb_vel, close,
                           collision_distance=d_cq - (d_cq - r_tol) * held, **land)
     psi_pref = own_psi + dpsi_min  # a readily apparent alteration to starboard (Rule 8) is preferred
+    if walls is not None:  # ... when a ship is close; for land alone, the heading closest to the field's
+        psi_pref = ca.if_else(ca.sum2(close) > 0, psi_pref, psi_f)
     e_pref = ca.vertcat(ca.cos(psi_pref), ca.sin(psi_pref))
     psi_vo = velocity_obstacle(own_pos, speed_now, own_pos + e_pref, nb_pos, nb_vel, close, collision_distance=d_cq,
                                n_candidates=n_candidates, current_heading=own_psi, **land)
@@ -621,6 +537,23 @@ def _field(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink,
         * heading_feasible(own_pos, slow_speed, psi_vo_next, nb_pos, nb_vel, close, collision_distance=d_cq)
     factor = 1 - ca.fmax(cut, speed_extremis * no_turn * (ca.sum2(close) > 0))
     return heading, factor, t
+
+
+def _keep_off_land(own_pos, own_psi, own_vel, vec, dpsi_cq, n_candidates, walls, clearance, horizon):
+    """``vec`` (2×1), or at its length the heading closest to it whose straight path clears land, when the heading
+    the ship turns through next on her way to it (at most ``dpsi_cq`` from her own) reaches land within
+    ``horizon``: the close-quarters filter with land alone (no neighbour)."""
+    speed_now = ca.fmax(ca.sqrt(ca.sumsqr(own_vel)), 1e-6)
+    psi_f = ca.atan2(vec[1], vec[0])
+    land = dict(walls=walls, clearance=clearance, horizon=horizon)
+    none = ca.SX(2, 0)
+    ok = heading_feasible(own_pos, speed_now, limit_turn(own_psi, psi_f, dpsi_cq), none, none, ca.SX(1, 0),
+                          collision_distance=1.0, **land)
+    psi_vo = velocity_obstacle(own_pos, speed_now, own_pos + ca.vertcat(ca.cos(psi_f), ca.sin(psi_f)), none,
+                               none, ca.SX(1, 0), collision_distance=1.0, n_candidates=n_candidates,
+                               current_heading=own_psi, **land)
+    psi_out = ca.if_else(ok, psi_f, psi_vo)
+    return ca.sqrt(ca.sumsqr(vec)) * ca.vertcat(ca.cos(psi_out), ca.sin(psi_out))
 
 
 def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, lam_sink, k_vor0, r_safe, r_tol,
@@ -702,7 +635,7 @@ def colregs_vortex(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, active, *, l
         The heading at the onset of the open give-way duties (rad), from which Rule 8's alteration is measured.
     walls : array_like, optional
         Wall and land segments (4×W, L): the stand-on action and the close-quarters filter exclude headings whose
-        straight path reaches them (:func:`~mmg_casadi.guidance.velocity_obstacle.land_blocked`); None: no land
+        straight path reaches them (:func:`~mmg_casadi.guidance.land_test.land_blocked`); None: no land
         test.
     clearance : float, optional
         Distance that path keeps from the segments (L); needed with ``walls``.
@@ -756,7 +689,7 @@ def colregs_vortex_command(own_pos, own_psi, own_vel, goal, nb_pos, nb_vel, acti
     **kw
         The keyword arguments of :func:`colregs_vortex` other than ``code``, ``course`` and ``base``, and
         optionally ``walls``, ``clearance`` and ``horizon``: the land test of
-        :func:`~mmg_casadi.guidance.velocity_obstacle.land_blocked` (the closed loop passes them in layouts with
+        :func:`~mmg_casadi.guidance.land_test.land_blocked` (the closed loop passes them in layouts with
         walls or land only), which makes the stand-on action and the close-quarters filter exclude headings whose
         straight path reaches land.
 

@@ -10,8 +10,8 @@ R_safe, the step's named parameters ``P``) and returns a :class:`Command`: a 2×
 direction is the heading ordered; it need not be a unit vector), optionally a propeller speed and the next value of
 its memory rows. Returning a bare vector is an error: wrap it, ``Command(vec)``.
 
-When the builder is in charge: while any neighbour is within R_safe (or a wall within its range), or while the
-method's ``engaged`` says so. The closed loop adds the channel walls' field to the heading vector and steers along
+When the builder is in charge: while any neighbour is within R_safe (or a wall within its range, or land within the
+ship's look-ahead, :mod:`mmg_casadi.guidance.land_ahead`), or while the method's ``engaged`` says so. The closed loop adds the channel walls' field to the heading vector and steers along
 the sum with the PD heading controller; outside R_safe the ship follows ILOS along her waypoints at her service
 propeller speed (a method may limit ILOS's turn, ``turn_limit``). A method with ``commands_speed`` orders a propeller
 speed (rev/min) that the engine (:func:`mmg_casadi.vessel.actuators.engine_step`) follows at its rate, clipped to
@@ -200,6 +200,17 @@ class Method:
     prefix : str or None
         The prefix of every name in ``params``; ``None``: the method's name with ``-`` and ``.`` as ``_``, plus
         ``_`` (``"starboard-rule"`` -> ``"starboard_rule_"``).
+    land_test : bool or None
+        Whether the builder keeps off land itself, from ``g.walls`` (a land test or a grounding cost). In layouts with
+        land the closed loop puts every method in charge while the ship's path ahead reaches land
+        (:mod:`mmg_casadi.guidance.land_ahead`); for a builder without a land test of its own it adds the paper's
+        wall source at the point of land that path meets to the builder's vector, as it adds the channel walls'
+        field. ``None``: true for a method with ``wall_inputs`` (it reads land inputs), false otherwise
+        (:attr:`tests_land`).
+    rule9 : bool
+        The method keeps to the starboard side of a narrow channel or fairway (COLREG Rule 9(a)): in layouts with
+        walls or land, ILOS and the builder's goal follow a lane ``bank_clearance`` from the starboard bank of a
+        channel at most ``channel_width`` wide (:mod:`mmg_casadi.guidance.fairway`).
     """
 
     name: str
@@ -216,6 +227,13 @@ class Method:
     engaged: Callable | None = None
     params: tuple = ()
     prefix: str | None = None
+    land_test: bool | None = None
+    rule9: bool = False
+
+    @property
+    def tests_land(self) -> bool:
+        """Whether the builder keeps off land itself (``land_test``; by default, whether it has ``wall_inputs``)."""
+        return bool(self.wall_inputs) if self.land_test is None else bool(self.land_test)
 
     @property
     def param_prefix(self) -> str:

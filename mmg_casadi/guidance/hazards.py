@@ -12,8 +12,9 @@ contribution to the guidance field. Kinds (:data:`KINDS`):
   centre comes within half its beam of the segment.
 - ``land``: an edge of a land polygon, a segment like a wall (same field, same contact at half the beam); the
   layout keeps land edges as the last wall segments (``Layout.n_land``,
-  :class:`~mmg_casadi.closed_loop.layout.Layout`), so the compiled step treats them as walls, and touching one is
-  reported as a grounding.
+  :class:`~mmg_casadi.closed_loop.layout.Layout`), so the compiled step gives them the walls' field and contact,
+  touching one is reported as a grounding, and the step also looks ahead for them
+  (:mod:`mmg_casadi.guidance.land_ahead`).
 
 Examples
 --------

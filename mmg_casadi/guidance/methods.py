@@ -171,7 +171,7 @@ METHODS: dict[str, Method] = {m.name: m for m in (
            "ours: the modified vortex with COLREG Rules 8, 13 and 17 (mmg_casadi.guidance.colregs_vortex)",
            inputs=(*(f"cv_{k}" for k in _CV_FIELDS), "cv_r_look"), goal_capture=True, memory=colregs_vortex.MEMORY,
            commands_speed=True, wall_inputs=LAND_INPUTS, turn_limit="cv_dpsi_free", lookout="cv_r_look",
-           engaged=giveway_open),
+           engaged=giveway_open, rule9=True),
 )}
 """Every method, by name (:func:`register` adds one)."""
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mmg_casadi.closed_loop.layout import Layout
+from mmg_casadi.closed_loop.layout import STOPPED, Layout
 from mmg_casadi.closed_loop.problem import Problem, build_problem
 from mmg_casadi.closed_loop.simulation import Trajectory, command_rows, simulate
 from mmg_casadi.closed_loop.state import ship_rows
@@ -290,7 +290,7 @@ def observe(layout: Layout, X: np.ndarray, st: Statics, *, k_ships: int, k_hazar
     vel = np.stack([u * np.cos(psi) - v * np.sin(psi), u * np.sin(psi) + v * np.cos(psi)], axis=-1)
     vel = vel + st.current[:, None, :]
     status = R[:, :, col("status")]
-    present = (status == 0) | ((status == 1) & (st.stays > 0.5))
+    present = (status == 0) | ((status == 1) & (st.stays > 0.5)) | (status == STOPPED)  # a stopped ship is a hazard
     own_psi, own_pos = psi[:, 0], pos[:, 0]
     own = np.column_stack([u[:, 0], v[:, 0], R[:, 0, col("r")], R[:, 0, col("delta")],
                            R[:, 0, col("n_prop")] / st.rpm_design, X[0] / st.t_max])

@@ -14,7 +14,7 @@ field ``e``, whether an excuse by a give-way duty to another ship changed a verd
 the mean graded score. For a rule, ``n`` counts the encounters in which the rule applies. Cells whose runs sailed
 a narrow channel also get the group ``rule 9``: per run the own ship's Rule 9(a) share (``colregs_rule9``,
 :mod:`mmg_casadi.colregs.narrow_channel`), ``n`` the runs in a channel, kept those at
-:data:`~mmg_casadi.colregs.narrow_channel.KEPT_SHARE` or more, the score the mean share. ``excused`` counts the
+the profile's ``rule9_kept_share`` (:class:`~mmg_casadi.colregs.profiles.ScoringProfile`) or more, the score the mean share. ``excused`` counts the
 group's encounters whose verdict an excuse changed. :func:`summarize_profiles` and :func:`compare_profiles` do the
 same for every scoring profile's column, with a ``profile`` column.
 
@@ -31,7 +31,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from mmg_casadi.colregs.narrow_channel import KEPT_SHARE
+from mmg_casadi.colregs.profiles import SCORING_PROFILES, scoring_profile
 from mmg_casadi.colregs.roles import ROLES
 from mmg_casadi.colregs.verdict import RULES
 from mmg_casadi.errors import InputError
@@ -183,7 +183,8 @@ def summarize_encounters(rows, column: str = "colregs_verdicts", profile: str = 
     column : str, default "colregs_verdicts"
         The column of verdicts to read.
     profile : str, default ""
-        The value of the ``profile`` column of every row returned.
+        The value of the ``profile`` column of every row returned; a scoring profile's name also sets the Rule 9
+        share at which a run keeps the rule (its ``rule9_kept_share``; any other name: the default profile's).
 
     Returns
     -------
@@ -203,6 +204,7 @@ def summarize_encounters(rows, column: str = "colregs_verdicts", profile: str = 
     [(2, 1)]
     """
     out = []
+    kept_share = scoring_profile(profile if profile in SCORING_PROFILES else None).rule9_kept_share
     for (env, method), group in _cells(rows).items():
         verdicts = [v for r in group for v in parse_verdicts(r.get(column), column)]
         for name in GROUPS:
@@ -218,7 +220,7 @@ def summarize_encounters(rows, column: str = "colregs_verdicts", profile: str = 
         shares = [x for x in (_share(r.get("colregs_rule9")) for r in group) if x is not None]
         if shares:  # runs in a narrow channel: Rule 9(a), one verdict per run
             out.append({"profile": profile, "environment": env, "method": method, "group": "rule 9",
-                        **_rate(len(shares), sum(x >= KEPT_SHARE for x in shares), shares)})
+                        **_rate(len(shares), sum(x >= kept_share for x in shares), shares)})
     return out
 
 
@@ -278,7 +280,8 @@ def compare_encounters(rows, methods=None, column: str = "colregs_verdicts", pro
     column : str, default "colregs_verdicts"
         The column of verdicts to read.
     profile : str, default ""
-        The value of the ``profile`` column of every row returned.
+        The value of the ``profile`` column of every row returned; a scoring profile's name also sets the Rule 9
+        share at which a run keeps the rule (its ``rule9_kept_share``; any other name: the default profile's).
 
     Returns
     -------

@@ -382,10 +382,10 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
             **own_ship_encounters(t, states, P["colregs_profile"],
                                   alternatives=tuple(SCORING_PROFILES) if P["colregs_all_profiles"] else
                                   (P["colregs_profile"],)),
-            "colregs_rule9": own_ship_rule9(scenario, t, states)}
+            "colregs_rule9": own_ship_rule9(scenario, t, states, P["colregs_profile"])}
 
 
-def own_ship_rule9(scenario, t, states) -> float:
+def own_ship_rule9(scenario, t, states, profile=None) -> float:
     """The own ship's Rule 9(a) score (:func:`mmg_casadi.colregs.narrow_channel.rule9`) of one run.
 
     Parameters
@@ -394,6 +394,8 @@ def own_ship_rule9(scenario, t, states) -> float:
         The run's scenario (its walls and land).
     t, states : array (K,), (K, N, 4)
         Decimated history, as for :func:`own_ship_encounters`.
+    profile : str, optional
+        The scoring profile, whose ``rule9_width`` says which channels are narrow (default ``published``).
 
     Returns
     -------
@@ -405,7 +407,7 @@ def own_ship_rule9(scenario, t, states) -> float:
     if not banks:
         return math.nan
     states = np.asarray(states, float)
-    r = rule9(t, states[:, 0, :2], states[:, 0, 2], sailing_mask(states[:, :, 3])[:, 0], banks)
+    r = rule9(t, states[:, 0, :2], states[:, 0, 2], sailing_mask(states[:, :, 3])[:, 0], banks, profile=profile)
     return math.nan if r is None else r.score
 
 

@@ -211,6 +211,13 @@ CASES: dict[str, Case] = {
 """Every labelled case, by name."""
 
 
+SAIL_THROUGH = 1e-9
+"""``collision_distance`` (L) of a case's run: the ships sail their scripted tracks through a contact. A case is an
+input of the scorer, which judges what the ships did and has no contact model; since a contact ends a voyage in the
+closed loop (issue 43), a case run at the collision distance of 2 L would end where two ships touch, before the
+moment Rule 17(b) is judged at (60 s before the straight-line CPA), and lose the verdicts it was labelled with."""
+
+
 def simulate_case(case: Case):
     """The closed-loop run of a case: times, positions, headings, sailing flags and names.
 
@@ -228,7 +235,8 @@ def simulate_case(case: Case):
     from mmg_casadi.closed_loop.simulation import simulate
     from mmg_casadi.scenarios.scenario import scenario_from_dict
 
-    d = {"settings": {"method": "none", "t_max": case.t_max, "goal_tolerance": 1.0}, "ships": list(case.ships)}
+    d = {"settings": {"method": "none", "t_max": case.t_max, "goal_tolerance": 1.0,
+                      "collision_distance": SAIL_THROUGH}, "ships": list(case.ships)}
     problem = build_problem(scenario_from_dict(d))
     tr = simulate(problem.layout, problem.x0, problem.p)
     n = len(case.ships)

@@ -72,9 +72,9 @@ def metrics_schema() -> dict:
     --------
     >>> s = metrics_schema()
     >>> s["required"]
-    ['method', 'collision', 't_end', 'params', 'ships', 'pairs']
+    ['method', 'collision', 't_end', 'params', 'ships', 'pairs', 'route_warnings']
     >>> s["$defs"]["ship"]["properties"]["status"]["enum"]
-    ['reached', 'diverged', 'stalled', 'timeout']
+    ['reached', 'diverged', 'stalled', 'timeout', 'grounded', 'collided']
     """
     from mmg_casadi.closed_loop.outcome import OUTCOMES
     from mmg_casadi.colregs.classify import ENCOUNTERS
@@ -109,10 +109,21 @@ def metrics_schema() -> dict:
             "share": {"type": "number", "minimum": 0, "maximum": 1}, "mean_offset": {"type": "number"},
             "min_width": {"type": "number"}},
             description="COLREG Rule 9(a) in a narrow channel (mmg_casadi.colregs.narrow_channel.rule9)")]},
+        "route": _obj({"planned": {"type": "boolean"}, "waypoints": {"type": "array", "minItems": 1, "items": _POINT}},
+                      description="The route sailed: the waypoints, planned around the land or as given "
+                                  "(mmg_casadi.scenarios.routes)"),
         "min_speed": _NUM,
         "reduced_speed_time": {"type": "number"},
         "delay": _NUM,
     }, description="One ship's outcome (the closed loop's judgement) and its speed metrics.")
+    route_warning = _obj({
+        "ship": {"type": "string"}, "index": {"type": "integer", "minimum": 0},
+        "leg": {"type": "integer", "minimum": 0}, "from": _POINT, "to": _POINT,
+        "land": {"type": "string", "pattern": "^land[0-9]+$"}, "crosses": {"type": "boolean"},
+        "distance": {"type": "number", "minimum": 0}, "clearance": {"type": "number", "minimum": 0},
+        "where": _POINT,
+    }, description="A route leg across land or within the grounding clearance of it "
+                   "(mmg_casadi.scenarios.routes.check_routes).")
 
     moment = _obj({"t": _NUM, "range": _NUM})
     rule = _obj({"verdict": {"type": "boolean"}, "score": {"type": "number", "minimum": 0, "maximum": 1}},
@@ -188,8 +199,10 @@ def metrics_schema() -> dict:
             "ships": {"type": "array", "minItems": 1, "items": {"$ref": "#/$defs/ship"}},
             "pairs": {"type": "array", "items": {"oneOf": [{"$ref": "#/$defs/ship_pair"},
                                                            {"$ref": "#/$defs/obstacle_pair"}]}},
+            "route_warnings": {"type": "array", "items": {"$ref": "#/$defs/route_warning"}},
         }),
-        "$defs": {"ship": ship, "ship_pair": ship_pair, "obstacle_pair": obstacle_pair, "encounter": encounter},
+        "$defs": {"ship": ship, "ship_pair": ship_pair, "obstacle_pair": obstacle_pair, "encounter": encounter,
+                  "route_warning": route_warning},
     }
 
 

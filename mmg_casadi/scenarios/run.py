@@ -3,14 +3,18 @@
 ``metrics.json`` schema (stable; distances in L, times non-dimensional L/U_des)::
 
     {"method": str, "collision": bool, "t_end": float, "params": {every parameter of the table, resolved},
-     "ships": [{"name", "method", "status": "reached"|"diverged"|"stalled"|"timeout",
+     "ships": [{"name", "method",
+                "status": "reached"|"diverged"|"stalled"|"timeout"|"grounded"|"collided",
                 "reached_goal": bool, "time_to_goal": float|null, "ce": float, "mcte": float,
                 "collided": bool, "collision_time": float|null, "collision_with": str|null,
                 "collision_kind": "ship"|"obstacle"|"wall"|"land"|null, "collision_position": [x, y]|null,
                 "min_speed": float,
                 "reduced_speed_time": float, "delay": float|null,
                 "min_distance": float, "stalled_at": [x, y]|null, "reactive_time": float,
-                "rule9": {"verdict", "score", "channel_time", ...}|null}],
+                "rule9": {"verdict", "score", "channel_time", ...}|null,
+                "route": {"planned": bool, "waypoints": [[x, y], ...]}}],
+     "route_warnings": [{"ship", "index", "leg", "from", "to", "land", "crosses", "distance", "clearance",
+                         "where"}],
      "pairs": [{"a", "b", "min_distance", "t_min", "encounter", "compliant",
                 "encounter_b", "compliant_b", "t_enter", "rules",
                 "encounters": {"a": [Encounter.to_dict()], "b": [Encounter.to_dict()]}}]}
@@ -27,11 +31,20 @@ together over every ship it is paired with (all of them; in a fleet scenario tho
 conflicting duties (Rule 2(b)) are flagged.
 
 ``rule9`` is the ship's COLREG Rule 9(a) verdict in a narrow channel (:mod:`mmg_casadi.colregs.narrow_channel`):
-the share of her time in a narrow channel (walls or land on both sides across her track, at most 20 L apart)
-spent on the starboard side of its centre line, kept at 90 %; ``null`` for a ship never in a narrow channel.
+the share of her time in a narrow channel (walls or land on both sides across her track, at most the profile's
+``rule9_width``, 20 L, apart) spent on the starboard side of its centre line, kept at the profile's
+``rule9_kept_share`` (90 %), under the profile ``colregs_profile``; ``null`` for a ship never in a narrow channel.
 
 ``collision_kind`` ``"land"`` is a grounding (the ship touched an edge of a land polygon ``land<k>``);
-``collision_position`` is where the ship was at its first collision or grounding.
+``collision_position`` is where the ship was at its first collision or grounding. A collision or grounding ends
+that ship's voyage (:func:`mmg_casadi.closed_loop.step.stop_on_contact`): she is held where it happened and her
+``status`` is ``"grounded"`` (land) or ``"collided"`` (a ship, an obstacle or a channel wall), never
+``"reached"``; ``time_to_goal`` is then null and CE and MCTE are over her voyage up to the contact.
+
+``route`` is the route the ship sailed, ``planned`` when it was planned around the land (``route = "plan"``,
+:mod:`mmg_casadi.scenarios.routes`); ``route_warnings`` lists the legs of the routes that cross land or pass within
+the grounding clearance of it (:func:`mmg_casadi.scenarios.routes.check_routes`; ``simulate`` prints one line per
+leg on stderr).
 
 The other pair keys are the *legacy scorer*, kept unchanged for now: ``encounter``/``compliant`` are from ship
 ``a``'s side (``encounter_b``/``compliant_b`` from ``b``'s) and ``rules`` is the rule-by-rule scoring of
@@ -61,6 +74,7 @@ from mmg_casadi.colregs.scorer import score_encounters
 from mmg_casadi.errors import InputError
 from mmg_casadi.guidance.methods import run_of
 from mmg_casadi.io import json_safe, staged_directory, write_json
+from mmg_casadi.scenarios.routes import check_routes, plan_routes
 from mmg_casadi.scenarios.scenario import Scenario, load_scenario, with_method
 from mmg_casadi.vessel.library import pair_collision_distance, ship_size
 
@@ -243,6 +257,7 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
         sc = packaged_scenario(path.stem) if shipped and path.stem in packaged_names() else load_scenario(path)
     if method is not None:
         sc = with_method(sc, method)
+    sc = plan_routes(sc, sc.settings.resolved(params))
     problem = build_problem(sc, params)
     with run_of(problem.layout.methods, params):
         traj = simulate(problem.layout, problem.x0, problem.p)
@@ -370,6 +385,8 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     t_end = float(traj.t[-1])
     final = np.concatenate([[t_end], traj.final.ravel()])
     banks = scenario_segments(sc)
+    unit = sc.ships[0].vessel or params["vessel"]
+    sizes = [ship_size(s.vessel or params["vessel"], s.length_m, s.beam_m, unit=unit) for s in sc.ships]
     ships = []
     for i, (s, o) in enumerate(zip(sc.ships, ship_outcomes(traj.layout, final, params))):
         ships.append({
@@ -388,7 +405,9 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
             "min_distance": o["min_distance"],
             "stalled_at": None if o["stalled_at"] is None else list(o["stalled_at"]),
             "reactive_time": o["reactive_time"],
-            "rule9": _rule9(traj, i, mask[:, i], banks),
+            "rule9": _rule9(traj, i, mask[:, i], banks, params["colregs_profile"]),
+            "route": {"planned": getattr(s, "track", None) is None and (s.route or params["route"]) == "plan",
+                      "waypoints": [list(w) for w in s.waypoints]},
             **(_speed_metrics(s, traj, i, mask[:, i], o["time_to_goal"], params["goal_tolerance"])
                if getattr(s, "track", None) is None else _replay_speed_metrics(traj, i, mask[:, i])),
         })
@@ -402,8 +421,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     for i, k in obstacle_pairs:
         obstacles_of[i].append(k)
     judged = _encounters(traj, mask, names, ship_pairs, params["colregs_profile"])
-    lengths = [ship_size(s.vessel or params["vessel"], s.length_m, unit=sc.ships[0].vessel or params["vessel"])[0]
-               for s in sc.ships]
+    lengths = [size[0] for size in sizes]
     for i in range(N):
         pi = np.column_stack([traj.state("x", i), traj.state("y", i)])
         for j in partners[i]:
@@ -431,8 +449,9 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
                           "t_min": float(traj.t[kmin]), "encounter": "static" if d[kmin] <= g["r_safe"] else "none",
                           "compliant": None, "encounter_b": None, "compliant_b": None, "t_enter": None})
     collision = any(s["collided"] for s in ships)  # the closed loop's own judgement (ships and every hazard)
+    warnings = check_routes(sc, [half + params["grounding_margin"] for _, half in sizes]) if sc.land else []
     metrics = {"method": sc.settings.method, "collision": bool(collision), "t_end": t_end,
-               "params": dict(params), "ships": ships, "pairs": pairs}
+               "params": dict(params), "ships": ships, "pairs": pairs, "route_warnings": warnings}
     return ScenarioResult(sc, traj, json_safe(metrics), labels)
 
 
@@ -452,10 +471,11 @@ def scenario_segments(sc) -> list:
     return [seg for w in sc.walls for seg in w.segments] + [e for land in sc.land for e in land.edges]
 
 
-def _rule9(traj: Trajectory, i: int, active, banks: list):
-    """Ship ``i``'s Rule 9(a) verdict (:func:`mmg_casadi.colregs.narrow_channel.rule9`) as a dict, or None."""
+def _rule9(traj: Trajectory, i: int, active, banks: list, profile: str):
+    """Ship ``i``'s Rule 9(a) verdict (:func:`mmg_casadi.colregs.narrow_channel.rule9`, under ``profile``) as a
+    dict, or None."""
     xy = np.column_stack([traj.state("x", i), traj.state("y", i)])
-    r = rule9(traj.t, xy, traj.state("psi", i), active, banks)
+    r = rule9(traj.t, xy, traj.state("psi", i), active, banks, profile=profile)
     return None if r is None else r.to_dict()
 
 

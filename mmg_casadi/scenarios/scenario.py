@@ -21,6 +21,7 @@ times non-dimensional (L/U). A scenario file looks like::
     # stays = false              # optional: after reaching its goal the ship stays as an obstacle
     # vessel = "kcs"             # optional: the ship's hull (default the table's 'vessel')
     # speeds = [1.0]             # optional: speed on the leg to each waypoint (default: speed on every leg)
+    # route = "plan"             # optional: plan the route around the land (default settings.route, "as-given")
     # track = "target.csv"       # a target only, instead of start ... speeds and method: it replays this
                                  #   recorded track (t, x, y) in time (mmg_casadi.scenarios.tracks)
     # length_m = 122.0           # optional: the ship's own length and beam in metres (default: its vessel's);
@@ -89,7 +90,7 @@ PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
 """Table parameters kept in :attr:`Settings.params`."""
 SETTINGS_KEYS = ("method",) + tuple(PARAMETERS)
 SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays", "vessel", "speeds", "length_m",
-             "beam_m", "metadata", "track")
+             "beam_m", "metadata", "track", "route")
 REPLAY_KEYS = ("name", "track", "stays", "vessel", "length_m", "beam_m", "metadata")
 """Keys of a replayed ship (one with a ``track``): its start, heading, speed and goal come from the track."""
 OBSTACLE_KEYS = ("position", "radius")
@@ -214,6 +215,9 @@ class ShipSpec:
         A replayed ship's recorded track (:mod:`mmg_casadi.scenarios.tracks`): it follows the track instead of
         being simulated, and ``start``, ``heading_deg``, ``speed`` and ``waypoints`` (its last position) are the
         track's at t = 0; ``None`` for a simulated ship.
+    route : str or None, optional
+        ``"plan"``: her route is planned around the land (:mod:`mmg_casadi.scenarios.routes`); ``"as-given"``: her
+        waypoints as written; ``None``: the parameter ``route``.
 
     Examples
     --------
@@ -235,6 +239,7 @@ class ShipSpec:
     beam_m: float | None = None
     metadata: dict = field(default_factory=dict, hash=False)
     track: Track | None = None
+    route: str | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "start", _as_point(self.start))
@@ -463,8 +468,9 @@ def _ship(t: dict, i: int, base_dir=None) -> ShipSpec:
         speeds = tuple(_ranged(v, f"{p}.speeds[{k}]", lo, hi, unit=unit) for k, v in enumerate(t["speeds"]))
     size = _size(t, p)
     metadata = check_metadata(t["metadata"], f"{p}.metadata") if "metadata" in t else {}
+    route = _string(t["route"], f"{p}.route", PARAMETERS["route"].choices) if "route" in t else None
     return ShipSpec(name, start, heading, speed, waypoints, method, stays, vessel, speeds, metadata=metadata,
-                    **size)
+                    route=route, **size)
 
 
 def _replayed_ship(t: dict, i: int, base_dir=None) -> ShipSpec:

@@ -33,7 +33,7 @@ def _ship_dict(ship) -> dict:
         d["vessel"] = ship.vessel
     if ship.speeds is not None:
         d["speeds"] = list(ship.speeds)
-    for k in ("length_m", "beam_m"):
+    for k in ("length_m", "beam_m", "route"):
         if getattr(ship, k) is not None:
             d[k] = getattr(ship, k)
     if ship.metadata:

@@ -111,7 +111,8 @@ def ship_lines(metrics: dict, units: Units | None = None) -> list[str]:
     for s in ships:
         status = s.get("status")
         if s.get("collided"):
-            what = f"collided with {s.get('collision_with')}"
+            what = (f"grounded on {s.get('collision_with')}" if s.get("collision_kind") == "land" else
+                    f"collided with {s.get('collision_with')}")
             if s.get("collision_time") is not None:
                 what += f" at t = {units.fmt_time(s['collision_time'])}"
         elif s.get("method") == "replay":
