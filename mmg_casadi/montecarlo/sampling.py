@@ -267,8 +267,7 @@ class SampledScenario:
         """
         if not isinstance(method, str) or not method:
             raise InputError("method", "a non-empty method name", method)
-        if targets not in PARAMETERS["targets"].choices:
-            raise InputError("targets", f"one of: {', '.join(PARAMETERS['targets'].choices)}", targets)
+        targets = PARAMETERS["targets"].check(targets, cls=InputError)
         target_slowdown = PARAMETERS["target_slowdown"].check(target_slowdown, cls=InputError)
         target_vessels = PARAMETERS["target_vessels"].check(target_vessels, cls=InputError)
         settings = {"method": method}

@@ -21,6 +21,9 @@ times non-dimensional (L/U). A scenario file looks like::
     # stays = false              # optional: after reaching its goal the ship stays as an obstacle
     # vessel = "kcs"             # optional: the ship's hull (default the table's 'vessel')
     # speeds = [1.0]             # optional: speed on the leg to each waypoint (default: speed on every leg)
+    # behaviour = "late"         # a target only: avoid | hold | late | wrong | intent (mmg_casadi.traffic)
+    # late_delay = 4.0           #   late: her method acts once it has wanted to this long (L/U)
+    # wrong_turn = 40.0          #   wrong: the turn to port (deg) in a head-on or crossing risk
     # track = "target.csv"       # a target only, instead of start ... speeds and method: it replays this
                                  #   recorded track (t, x, y) in time (mmg_casadi.scenarios.tracks)
     # length_m = 122.0           # optional: the ship's own length and beam in metres (default: its vessel's);
@@ -79,16 +82,17 @@ from mmg_casadi.errors import ParameterError, ScenarioError, check_range
 from mmg_casadi.io import read_toml
 from mmg_casadi.scenarios.geodesy import read_header
 from mmg_casadi.scenarios.geojson_land import chart_land
+from mmg_casadi.scenarios.scenario_fields import (_POINT, _as_point, _as_points, _is_number, _number, _point,
+                                                  _points, _range_text, _ranged, _required, _string, _table, _tables,
+                                                  toml_key)
 from mmg_casadi.scenarios.tracks import Track, parse_track
+from mmg_casadi.traffic import behaviour as traffic_behaviour
+from mmg_casadi.scenarios.scenario_writer import PARAM_KEYS, SETTINGS_FIELDS, dump_scenario, scenario_to_dict
 from mmg_casadi.params import PARAMETERS, check_value, resolve
 
-SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_tolerance")
-"""Table parameters that are fields of :class:`Settings`."""
-PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
-"""Table parameters kept in :attr:`Settings.params`."""
 SETTINGS_KEYS = ("method",) + tuple(PARAMETERS)
 SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays", "vessel", "speeds", "length_m",
-             "beam_m", "metadata", "track")
+             "beam_m", "metadata", "track", "behaviour", "late_delay", "wrong_turn")
 REPLAY_KEYS = ("name", "track", "stays", "vessel", "length_m", "beam_m", "metadata")
 """Keys of a replayed ship (one with a ``track``): its start, heading, speed and goal come from the track."""
 OBSTACLE_KEYS = ("position", "radius")
@@ -102,19 +106,6 @@ ENVIRONMENT_KEYS = {"current_speed": "current_speed", "current_direction": "curr
 SPEED_RANGE = (0.2, 1.2)
 """Allowed ``speed`` of a ship (``[[ships]]`` table), (low, high) as fractions of the design speed, inclusive."""
 SHIP_HALF_LENGTH = 0.5
-
-_POINT = "a point [x, y] of two finite numbers (ship lengths)"
-
-
-def _as_point(p) -> tuple[float, float]:
-    """``p`` as a tuple of two floats."""
-    return (float(p[0]), float(p[1]))
-
-
-def _as_points(ps) -> tuple[tuple[float, float], ...]:
-    """``ps`` as a tuple of points."""
-    return tuple(_as_point(p) for p in ps)
-
 
 @dataclass(frozen=True)
 class Settings:
@@ -222,6 +213,13 @@ class ShipSpec:
         :func:`check_metadata`): for a maritime-schema ship its ``static`` object without ``name`` and the
         length and width, e.g. ``id``, ``mmsi``, ``shipType``, ``sogMax``, ``dimensions.height``. Left out of the
         hash.
+    behaviour : str or None, optional
+        A target's behaviour (:data:`~mmg_casadi.traffic.behaviour.FILE_BEHAVIOURS`, :mod:`mmg_casadi.traffic`);
+        ``None``: she sails with her method as always.
+    late_delay : float or None, optional
+        A late ship's delay (L/U).
+    wrong_turn_deg : float or None, optional
+        A wrong-way ship's turn to port (deg).
     track : Track or None, optional
         A replayed ship's recorded track (:mod:`mmg_casadi.scenarios.tracks`): it follows the track instead of
         being simulated, and ``start``, ``heading_deg``, ``speed`` and ``waypoints`` (its last position) are the
@@ -247,6 +245,9 @@ class ShipSpec:
     beam_m: float | None = None
     metadata: dict = field(default_factory=dict, hash=False)
     track: Track | None = None
+    behaviour: str | None = None
+    late_delay: float | None = None
+    wrong_turn_deg: float | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "start", _as_point(self.start))
@@ -420,121 +421,6 @@ class Scenario:
         return self.settings.method if own is None else own
 
 
-def toml_key(k: str) -> str:
-    r"""``k`` as written in a dotted TOML key: bare if it may be, else a quoted string (so it fits on one line).
-
-    Parameters
-    ----------
-    k : str
-        One key (one part of a dotted key). It stays bare if it is non-empty and only ASCII letters, digits,
-        ``_`` and ``-``; otherwise it becomes a JSON-escaped (hence valid TOML basic) string in double quotes.
-
-    Returns
-    -------
-    str
-        The key as TOML text.
-
-    Examples
-    --------
-    >>> toml_key("speed"), toml_key(""), toml_key("a\nb")
-    ('speed', '""', '"a\\nb"')
-    """
-    if k and all(c.isascii() and (c.isalnum() or c in "_-") for c in k):
-        return k
-    return json.dumps(k)
-
-
-def _table(value, key: str, allowed_keys) -> dict:
-    """``value`` as a table whose keys all lie in ``allowed_keys`` (``key`` is its dotted name, "" for the root)."""
-    if not isinstance(value, dict):
-        raise ScenarioError(key or "scenario", "a table", value)
-    for k in value:
-        if k not in allowed_keys:
-            name = toml_key(k)
-            raise ScenarioError(f"{key}.{name}" if key else name, f"a known key (one of: {', '.join(allowed_keys)})")
-    return value
-
-
-def _tables(d: dict, key: str, allowed_keys, *, required: bool) -> list[dict]:
-    """The array of tables ``d[key]`` (empty if absent and not ``required``)."""
-    if key not in d:
-        if required:
-            raise ScenarioError(key, f"at least one [[{key}]] table (required)")
-        return []
-    value = d[key]
-    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
-        raise ScenarioError(key, f"an array of tables [[{key}]]", value)
-    if required and not value:
-        raise ScenarioError(key, f"at least one [[{key}]] table (required)", value)
-    return [_table(v, f"{key}[{i}]", allowed_keys) for i, v in enumerate(value)]
-
-
-def _required(d: dict, key: str, prefix: str, allowed: str):
-    """``d[key]``, or a ScenarioError naming ``prefix.key`` if it is missing."""
-    if key not in d:
-        raise ScenarioError(f"{prefix}.{key}", f"{allowed} (a required key, missing here)")
-    return d[key]
-
-
-def _is_number(value) -> bool:
-    """True for a finite int or float (not a bool; an int too large for a float is not finite)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return False
-    try:
-        return math.isfinite(value)
-    except OverflowError:
-        return False
-
-
-def _number(value, key: str, allowed: str = "a finite number") -> float:
-    """``value`` as a float if it is a finite number."""
-    if not _is_number(value):
-        raise ScenarioError(key, allowed, value)
-    return float(value)
-
-
-def _range_text(key: str, low, high, **kw) -> str:
-    """The ``allowed`` text :func:`check_range` gives for this interval."""
-    try:
-        check_range(key, math.nan, low, high, cls=ScenarioError, **kw)
-    except ScenarioError as err:
-        return err.allowed
-    raise AssertionError("check_range accepted nan")
-
-
-def _ranged(value, key: str, low=None, high=None, **kw) -> float:
-    """``value`` as a float if it is a finite number (not a bool or a string) in the given interval."""
-    if not _is_number(value):
-        raise ScenarioError(key, _range_text(key, low, high, **kw), value)
-    return check_range(key, value, low, high, cls=ScenarioError, **kw)
-
-
-def _string(value, key: str, allowed=None) -> str:
-    """``value`` if it is a (non-empty) string, optionally one of ``allowed``."""
-    if allowed is not None:
-        if not isinstance(value, str) or value not in allowed:
-            raise ScenarioError(key, f"one of: {', '.join(allowed)}", value)
-        return value
-    if not isinstance(value, str) or not value:
-        raise ScenarioError(key, "a non-empty string", value)
-    return value
-
-
-def _point(value, key: str) -> tuple[float, float]:
-    """``value`` as a point: a list of two finite numbers."""
-    if not isinstance(value, (list, tuple)) or len(value) != 2 or not all(_is_number(v) for v in value):
-        raise ScenarioError(key, _POINT, value)
-    return _as_point(value)
-
-
-def _points(value, key: str, min_count: int) -> tuple[tuple[float, float], ...]:
-    """``value`` as a tuple of at least ``min_count`` points."""
-    if not isinstance(value, (list, tuple)) or len(value) < min_count:
-        noun = "point" if min_count == 1 else "points"
-        raise ScenarioError(key, f"a list of at least {min_count} {noun} [[x, y], ...] (ship lengths)", value)
-    return tuple(_point(p, f"{key}[{j}]") for j, p in enumerate(value))
-
-
 def _settings(d: dict) -> Settings:
     """Validated [settings] table (every parameter range-checked against the table)."""
     if "settings" not in d:
@@ -653,7 +539,7 @@ def _ship(t: dict, i: int, base_dir=None) -> ShipSpec:
             if k in t}
     metadata = check_metadata(t["metadata"], f"{p}.metadata") if "metadata" in t else {}
     return ShipSpec(name, start, heading, speed, waypoints, method, stays, vessel, speeds, metadata=metadata,
-                    **size)
+                    **size, **traffic_behaviour.file_behaviour(t, p, i))
 
 
 def _replayed_ship(t: dict, i: int, base_dir=None) -> ShipSpec:
@@ -892,111 +778,3 @@ def with_params(s: Scenario, params: dict | None) -> Scenario:
     kw = {k: values.pop(k) for k in SETTINGS_FIELDS if k in values}
     settings = dataclasses.replace(s.settings, params={**s.settings.params, **values}, **kw)
     return dataclasses.replace(s, settings=settings)
-
-
-def _ship_dict(ship: ShipSpec) -> dict:
-    """One ship as a scenario-file table (a replayed ship with its track inline)."""
-    if ship.track is not None:
-        d = {"name": ship.name, "track": ship.track.to_dict(), "stays": ship.stays}
-        d.update({k: getattr(ship, k) for k in ("vessel", "length_m", "beam_m") if getattr(ship, k) is not None})
-        if ship.metadata:
-            d["metadata"] = copy.deepcopy(ship.metadata)
-        return d
-    d = {"name": ship.name, "start": list(ship.start), "heading": ship.heading_deg, "speed": ship.speed,
-         "waypoints": [list(p) for p in ship.waypoints]}
-    if ship.method is not None:
-        d["method"] = ship.method
-    d["stays"] = ship.stays
-    if ship.vessel is not None:
-        d["vessel"] = ship.vessel
-    if ship.speeds is not None:
-        d["speeds"] = list(ship.speeds)
-    for k in ("length_m", "beam_m"):
-        if getattr(ship, k) is not None:
-            d[k] = getattr(ship, k)
-    if ship.metadata:
-        d["metadata"] = copy.deepcopy(ship.metadata)
-    return d
-
-
-def scenario_to_dict(s: Scenario) -> dict:
-    """``s`` as a dict shaped like a scenario file (the inverse of :func:`scenario_from_dict`).
-
-    Parameters
-    ----------
-    s : Scenario
-        The scenario to convert.
-
-    Returns
-    -------
-    dict
-        ``settings``, ``ships``, ``obstacles``, ``walls`` and ``land`` as plain lists, dicts and numbers.
-
-    Examples
-    --------
-    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
-    >>> scenario_to_dict(s)["ships"][0]["waypoints"]
-    [[50.0, 0.0]]
-    >>> scenario_from_dict(scenario_to_dict(s)) == s
-    True
-    """
-    st = s.settings
-    settings = {"method": st.method, "dt": st.dt, "t_max": st.t_max, "r_safe": st.r_safe,
-                "collision_distance": st.collision_distance, "goal_tolerance": st.goal_tolerance}
-    settings.update({k: st.params[k] for k in PARAM_KEYS if k in st.params})
-    return {
-        "settings": settings,
-        "ships": [_ship_dict(ship) for ship in s.ships],
-        "obstacles": [{"position": list(ob.position), "radius": ob.radius} for ob in s.obstacles],
-        "walls": [{"points": [list(p) for p in w.points]} for w in s.walls],
-        "land": [{"points": [list(p) for p in a.points]} for a in s.land],
-    }
-
-
-def dump_scenario(s: Scenario) -> str:
-    """``s`` as scenario-file TOML text; ``scenario_from_dict(tomllib.loads(dump_scenario(s))) == s``.
-
-    :func:`scenario_to_dict` without its empty ``obstacles``, ``walls`` and ``land``, written by ``tomli_w.dumps``.
-
-    Parameters
-    ----------
-    s : Scenario
-        The scenario to write.
-
-    Returns
-    -------
-    str
-        TOML text of a scenario file.
-
-    Examples
-    --------
-    >>> s = Scenario(Settings("none"), [ShipSpec("own", [0, 0], 0, 1, [[50, 0]])])
-    >>> print(dump_scenario(s))
-    [settings]
-    method = "none"
-    dt = 0.25
-    t_max = 300.0
-    r_safe = 15.0
-    collision_distance = 2.0
-    goal_tolerance = 3.0
-    <BLANKLINE>
-    [[ships]]
-    name = "own"
-    start = [
-        0.0,
-        0.0,
-    ]
-    heading = 0.0
-    speed = 1.0
-    waypoints = [
-        [
-            50.0,
-            0.0,
-        ],
-    ]
-    stays = false
-    <BLANKLINE>
-    >>> scenario_from_dict(tomllib.loads(dump_scenario(s))) == s
-    True
-    """
-    return tomli_w.dumps({k: v for k, v in scenario_to_dict(s).items() if v})
