@@ -42,6 +42,7 @@ from mmg_casadi.scenarios.interchange import convert_file
 from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
 from mmg_casadi.scenarios.run import packaged_names, packaged_scenario, packaged_scenarios, run_scenario
 from mmg_casadi.scenarios.scenario import dump_scenario, load_scenario, scenario_from_dict, with_method
+from mmg_casadi.traffic.sample import RANGES as TRAFFIC_RANGES
 from mmg_casadi.signals import end_deferred_signals, exit_status, signal_name, terminate_as_interrupt
 from mmg_casadi.vessel.library import load_vessel, vessel_table
 from mmg_casadi.vessel.maneuvers import speed_change, turning_circle, validate_maneuver_args, zigzag
@@ -310,8 +311,10 @@ def build_parser() -> argparse.ArgumentParser:
                             "(fraction of design speed, direction uniform), e.g. 0-0.1")
             sp.add_argument("--wind", default=None, metavar="LO-HI", help="per-run true wind speed range (m/s, "
                             "direction uniform), e.g. 0-15")
-            sp.add_argument("--targets", default=None, help="avoid | hold: the sampled target ships avoid with "
-                            "the study's method (default) or hold course and speed (same as --set targets=VALUE)")
+            sp.add_argument("--targets", default=None, help="avoid | hold | mix:NAME=P,...: the sampled target ships "
+                            "avoid with the study's method (default), hold course and speed, or draw a behaviour "
+                            "each (avoid, hold, late, wrong, intent), e.g. mix:avoid=0.6,hold=0.3,wrong=0.1 (same "
+                            "as --set targets=VALUE)")
             sp.add_argument("--vessels", default=None, help="hulls of the sampled target ships: own (default, the "
                             "own ship's), a vessel name, or two separated by a comma that the targets take in turn, "
                             "e.g. kvlcc2,kcs (mixed traffic; same as --set target_vessels=VALUE)")
@@ -429,7 +432,7 @@ def _params_of(a) -> dict | None:
         out["targets"] = check_value("targets", a.targets, field="--targets", cls=InputError)
     if getattr(a, "study", None) == "statistics" and a.vessels is not None:
         out["target_vessels"] = check_value("target_vessels", a.vessels, field="--vessels", cls=InputError)
-    for key in ("targets", "target_slowdown", "target_vessels"):
+    for key in ("targets", "target_slowdown", "target_vessels", *TRAFFIC_RANGES):
         if key in out and (a.command, getattr(a, "study", None)) not in _TARGETS_APPLY:
             raise InputError(key, "nothing outside `study statistics` and `study sweep` (it sets what their "
                              "sampled target ships do)", out[key])

@@ -19,7 +19,8 @@ from mmg_casadi.closed_loop.step import build_closed_loop_step
 from mmg_casadi.errors import ParameterError, ScenarioError
 from mmg_casadi.guidance import methods
 from mmg_casadi.limits import check_size, check_steps, check_unrolled
-from mmg_casadi.params import resolve
+from mmg_casadi.params import PARAMETERS, resolve
+from mmg_casadi.perception.layer import unused_parameter
 from mmg_casadi.traffic import behaviour as traffic_behaviour
 from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel, ship_size
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
@@ -251,6 +252,13 @@ def build_problem(sc, params: dict | None = None, *, error=None, commanded=(), c
                                         "with commanded ships (the fleet step takes no commands)",
                                         resolved["fleet_from_ships"])
     traffic = tuple(i for i, s in enumerate(sc.ships) if traffic_behaviour.ship_inputs(s) is not None)
+    unused = unused_parameter(resolved)
+    if unused is not None:
+        raise (error or ParameterError)(unused, f"its default {PARAMETERS[unused].default!r} with perception = "
+                                        f"{resolved['perception']!r} (a sensor it does not use)", resolved[unused])
+    if not traffic and resolved["target_wrong_dcpa"] != PARAMETERS["target_wrong_dcpa"].default:
+        raise (error or ParameterError)("target_wrong_dcpa", f"its default {PARAMETERS['target_wrong_dcpa'].default} "
+                                        "without a target that turns the wrong way", resolved["target_wrong_dcpa"])
     if (traffic or resolved["perception"] != "off") and len(sc.ships) >= resolved["fleet_from_ships"]:
         raise (error or ParameterError)("fleet_from_ships", f"more than the {len(sc.ships)} ships of a scenario with "
                                         "target behaviours or perception (the fleet step has neither)",

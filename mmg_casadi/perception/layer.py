@@ -191,6 +191,42 @@ def initial_interval(values: dict, ship, speed: float) -> float:
     return float(values["ais_interval_scale"]) * s / (float(ship.L) / float(ship.U_design))
 
 
+SENSOR_PARAMS = {"ais": ("ais_class", "ais_interval_scale", "ais_latency_s", "ais_dropout", "ais_position_sigma_m",
+                         "ais_sog_sigma_kn", "ais_cog_sigma_deg"),
+                 "radar": ("radar_range_sigma_m", "radar_bearing_sigma_deg", "radar_range_nm", "radar_p_detect",
+                           "tracker_q", "tracker_gate")}
+"""The table parameters of each sensor (the tracker's with the radar: the mode ``ais`` has no filter)."""
+
+
+def unused_parameter(resolved: dict) -> str | None:
+    """A sensor parameter set away from its default that the run's ``perception`` does not use, or None.
+
+    Parameters
+    ----------
+    resolved : dict
+        A resolved parameter set.
+
+    Returns
+    -------
+    str or None
+        The first such name (``perception_seed`` too with perception ``"off"``).
+
+    Examples
+    --------
+    >>> from mmg_casadi.params import resolve
+    >>> unused_parameter(resolve({"ais_dropout": 0.2})), unused_parameter(resolve({"perception": "radar",
+    ...                                                                             "radar_p_detect": 0.5}))
+    ('ais_dropout', None)
+    """
+    from mmg_casadi.params import PARAMETERS
+
+    mode = resolved["perception"]
+    names = [k for sensor, ks in SENSOR_PARAMS.items() if sensor not in mode for k in ks]
+    if mode == "off":
+        names.append("perception_seed")
+    return next((k for k in names if resolved[k] != PARAMETERS[k].default), None)
+
+
 def perception_error(layout, x_final) -> float:
     """Mean distance (L) between where the own ship's method saw a target and where it was, over the time a known
     target was within R_safe of the sailing own ship (``nan`` without perception or without such time).
