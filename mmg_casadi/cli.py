@@ -34,7 +34,7 @@ from mmg_casadi.io import check_output, write_json, write_text
 from mmg_casadi.limits import MAX_SHIPS, check_runs, check_steps
 from mmg_casadi.montecarlo.disturbance_sampling import parse_range
 from mmg_casadi.montecarlo.sampling import parse_envs, sample_traffic
-from mmg_casadi.params import PARAMETERS, check_value, help_text, load_file, markdown_table
+from mmg_casadi.params import PARAMETERS, check_value, group, help_text, load_file, markdown_table
 from mmg_casadi.determinism import compare_outputs
 from mmg_casadi.scenarios.ais_replay import REPLAY_METHOD, TARGETS, ais_scenario, load_ais_csv, parse_time
 from mmg_casadi.scenarios.generate import generate, load_description, override, standard_description, write_set
@@ -42,7 +42,6 @@ from mmg_casadi.scenarios.interchange import convert_file
 from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
 from mmg_casadi.scenarios.run import packaged_names, packaged_scenario, packaged_scenarios, run_scenario
 from mmg_casadi.scenarios.scenario import dump_scenario, load_scenario, scenario_from_dict, with_method
-from mmg_casadi.traffic.sample import RANGES as TRAFFIC_RANGES
 from mmg_casadi.signals import end_deferred_signals, exit_status, signal_name, terminate_as_interrupt
 from mmg_casadi.vessel.library import load_vessel, vessel_table
 from mmg_casadi.vessel.maneuvers import speed_change, turning_circle, validate_maneuver_args, zigzag
@@ -311,10 +310,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "(fraction of design speed, direction uniform), e.g. 0-0.1")
             sp.add_argument("--wind", default=None, metavar="LO-HI", help="per-run true wind speed range (m/s, "
                             "direction uniform), e.g. 0-15")
-            sp.add_argument("--targets", default=None, help="avoid | hold | mix:NAME=P,...: the sampled target ships "
-                            "avoid with the study's method (default), hold course and speed, or draw a behaviour "
-                            "each (avoid, hold, late, wrong, intent), e.g. mix:avoid=0.6,hold=0.3,wrong=0.1 (same "
-                            "as --set targets=VALUE)")
+            sp.add_argument("--targets", default=None, help="avoid | hold | mix:NAME=P,...: the sampled targets use "
+                            "the study's method, hold, or draw a behaviour each, e.g. mix:avoid=0.6,hold=0.3,wrong=0.1")
             sp.add_argument("--vessels", default=None, help="hulls of the sampled target ships: own (default, the "
                             "own ship's), a vessel name, or two separated by a comma that the targets take in turn, "
                             "e.g. kvlcc2,kcs (mixed traffic; same as --set target_vessels=VALUE)")
@@ -432,7 +429,7 @@ def _params_of(a) -> dict | None:
         out["targets"] = check_value("targets", a.targets, field="--targets", cls=InputError)
     if getattr(a, "study", None) == "statistics" and a.vessels is not None:
         out["target_vessels"] = check_value("target_vessels", a.vessels, field="--vessels", cls=InputError)
-    for key in ("targets", "target_slowdown", "target_vessels", *TRAFFIC_RANGES):
+    for key in ("targets", "target_slowdown", "target_vessels", *group("traffic")):
         if key in out and (a.command, getattr(a, "study", None)) not in _TARGETS_APPLY:
             raise InputError(key, "nothing outside `study statistics` and `study sweep` (it sets what their "
                              "sampled target ships do)", out[key])
