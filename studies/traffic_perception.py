@@ -282,7 +282,18 @@ def _write(out: Path, table: list, mix: str) -> None:
 
 
 def main(argv=None) -> int:
-    """Command line: ``python -m studies.traffic_perception --out DIR [...]``."""
+    """Command line: ``python -m studies.traffic_perception --out DIR [...]`` (see the module).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: the command line's).
+
+    Returns
+    -------
+    int
+        Exit status 0.
+    """
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True, type=Path)
     ap.add_argument("--runs", type=int, default=1000)

@@ -40,14 +40,36 @@ UPPER = ((0, 0), (0, 1), (0, 2), (0, 3), (1, 1), (1, 2), (1, 3), (2, 2), (2, 3),
 
 
 def inv2(S):
-    """Inverse of a 2×2 matrix (closed form)."""
+    """Inverse of a 2×2 matrix (closed form).
+
+    Parameters
+    ----------
+    S : SX or DM (2×2)
+        The matrix.
+
+    Returns
+    -------
+    SX or DM (2×2)
+        Its inverse, ``adj(S) / det(S)``.
+    """
     a, b, c, d = S[0, 0], S[0, 1], S[1, 0], S[1, 1]
     det = a * d - b * c
     return ca.vertcat(ca.horzcat(d, -b), ca.horzcat(-c, a)) / det
 
 
 def unpack(values):
-    """The 4×4 symmetric covariance from its ten upper-triangle values (:data:`UPPER`)."""
+    """The 4×4 symmetric covariance from its ten upper-triangle values (:data:`UPPER`).
+
+    Parameters
+    ----------
+    values : sequence of 10
+        The values, in the order of :data:`UPPER`.
+
+    Returns
+    -------
+    SX or DM (4×4)
+        The covariance.
+    """
     P = ca.SX.zeros(4, 4) if not isinstance(values[0], ca.DM) else ca.DM.zeros(4, 4)
     for (i, j), v in zip(UPPER, values):
         P[i, j] = v
@@ -56,7 +78,18 @@ def unpack(values):
 
 
 def pack(P) -> list:
-    """The ten upper-triangle values of a covariance (:data:`UPPER`)."""
+    """The ten upper-triangle values of a covariance (:data:`UPPER`).
+
+    Parameters
+    ----------
+    P : SX or DM (4×4)
+        The covariance.
+
+    Returns
+    -------
+    list
+        Its entries in the order of :data:`UPPER`.
+    """
     return [P[i, j] for i, j in UPPER]
 
 
@@ -139,14 +172,42 @@ def update(x, P, idx, z, R):
 
 
 def select(cond, a, b):
-    """``a`` where ``cond`` else ``b``, for a track (list of 4) and a covariance (4×4) alike."""
+    """``a`` where ``cond`` else ``b``, for a track (list of 4) and a covariance (4×4) alike.
+
+    Parameters
+    ----------
+    cond : SX
+        The condition (0/1).
+    a, b : list or SX
+        Two tracks or two covariances.
+
+    Returns
+    -------
+    list or SX
+        The selected one, element by element.
+    """
     if isinstance(a, list):
         return [ca.if_else(cond, u, v) for u, v in zip(a, b)]
     return ca.if_else(cond, a, b)
 
 
 def mahalanobis2(x, P, z, R):
-    """Squared Mahalanobis distance of a position measurement ``z`` (covariance ``R``) from the track's position."""
+    """Squared Mahalanobis distance of a position measurement ``z`` (covariance ``R``) from the track's position.
+
+    Parameters
+    ----------
+    x, P : list, SX
+        The track's mean and covariance.
+    z : sequence of 2
+        The measured position.
+    R : SX or DM (2×2)
+        Its covariance.
+
+    Returns
+    -------
+    SX
+        ``ν^T (P_pos + R)⁻¹ ν`` with the innovation ``ν = z − x_pos``.
+    """
     nu = ca.vertcat(z[0] - x[0], z[1] - x[1])
     S = P[[0, 1], [0, 1]] + R + EPS * ca.DM.eye(2)
     return ca.mtimes(ca.mtimes(nu.T, inv2(S)), nu)

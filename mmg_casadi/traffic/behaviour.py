@@ -39,8 +39,22 @@ FORWARD_COS = math.cos(math.radians(112.5))
 
 
 def split(layout, p, i: int):
-    """The traffic block of a parameter vector from row ``i``: ``({ship: {name: value}, "target_wrong_dcpa": v}, next
-    row)``."""
+    """The traffic block of a parameter vector from row ``i``.
+
+    Parameters
+    ----------
+    layout : Layout
+        A layout with traffic ships.
+    p : SX, MX, DM or ndarray
+        The parameter vector.
+    i : int
+        The block's first row.
+
+    Returns
+    -------
+    (dict, int)
+        ``{ship: {name: value}, "target_wrong_dcpa": value}`` and the row after the block.
+    """
     out = {}
     for ship in layout.traffic:
         out[ship] = {k: p[i + n] for n, k in enumerate(SHIP_INPUTS)}
