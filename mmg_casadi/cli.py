@@ -79,6 +79,15 @@ class _CliError(InputError):
         return f"{self.allowed} (see '{self.field} --help')"
 
 
+_LINE_BREAKS = {c: c.encode("unicode_escape").decode("ascii")
+                for c in "\n\r\v\f\x1c\x1d\x1e\x85\u2028\u2029"}
+
+
+def _error_line(e) -> str:
+    """``mmg-casadi: error: …`` as one line: a line break inside a given value (e.g. a file name) is escaped."""
+    return "mmg-casadi: error: " + str(e).translate(str.maketrans(_LINE_BREAKS))
+
+
 class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line and exit status 2."""
 
@@ -776,15 +785,15 @@ def main(argv=None) -> int:
                 if getattr(a, "check_determinism", False):
                     return _check_determinism(a, handlers[a.command])
     except _CliError as e:
-        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        print(_error_line(e), file=sys.stderr)
         return 2
     except InputError as e:
         if a is not None and not isinstance(e, _CliError):
             e = InputError(_flag(e.field, a), e.allowed, e.got)
-        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        print(_error_line(e), file=sys.stderr)
         return 2
     except RunError as e:
-        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        print(_error_line(e), file=sys.stderr)
         return 1
     except KeyboardInterrupt as e:
         what = ("finished results are kept; rerun the same command to resume" if _resumable(a) else
