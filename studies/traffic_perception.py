@@ -265,7 +265,7 @@ def plot(table: list, path) -> Figure:
             ax.grid(True, axis="y", alpha=0.3)
         lo = min(r["success_ci_low"] for r in table) * 100
         axes[0].set_ylim(max(0.0, 5 * math.floor(lo / 5) - 5), 100)
-        axes[0].legend(fontsize=7, ncol=2)
+        fig.legend(*axes[0].get_legend_handles_labels(), loc="outside upper center", ncol=len(conds), fontsize=7)
         fs.save(fig, path)
     return fig
 
