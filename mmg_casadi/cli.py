@@ -34,7 +34,7 @@ from mmg_casadi.io import StagedFiles, check_output, write_json, write_text
 from mmg_casadi.limits import MAX_SHIPS, check_runs, check_steps
 from mmg_casadi.montecarlo.disturbance_sampling import parse_range
 from mmg_casadi.montecarlo.sampling import parse_envs, sample_traffic
-from mmg_casadi.params import PARAMETERS, check_value, help_text, load_file, markdown_table
+from mmg_casadi.params import PARAMETERS, check_value, group, help_text, load_file, markdown_table
 from mmg_casadi.determinism import compare_outputs
 from mmg_casadi.scenarios.ais_replay import TARGETS, ais_scenario, load_ais_csv, parse_time
 from mmg_casadi.scenarios.generate import generate, load_description, override, standard_description, write_set
@@ -73,7 +73,7 @@ def _params_of(a) -> dict | None:
         out["targets"] = check_value("targets", a.targets, field="--targets", cls=InputError)
     if getattr(a, "study", None) == "statistics" and a.vessels is not None:
         out["target_vessels"] = check_value("target_vessels", a.vessels, field="--vessels", cls=InputError)
-    for key in ("targets", "target_slowdown", "target_vessels"):
+    for key in ("targets", "target_slowdown", "target_vessels", *group("traffic")):
         if key in out and (a.command, getattr(a, "study", None)) not in _TARGETS_APPLY:
             raise InputError(key, "nothing outside `study statistics` and `study sweep` (it sets what their "
                              "sampled target ships do)", out[key])

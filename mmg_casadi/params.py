@@ -32,15 +32,16 @@ from pathlib import Path
 
 from mmg_casadi.colregs.profiles import SCORING_PROFILES
 from mmg_casadi.errors import InputError, ParameterError, check_range
+from mmg_casadi.traffic.mix import ALLOWED as TARGETS_ALLOWED, parse_targets
 from mmg_casadi.vessel.library import VESSELS
 
 GROUPS = ("simulation", "vessel", "ilos", "pd", "inverse-square", "sink-vortex", "modified-vortex", "colregs-vortex",
-          "walls", "velocity-obstacle", "outcome", "environment")
+          "walls", "velocity-obstacle", "outcome", "environment", "traffic", "perception")
 """Parameter groups of the shipped table, in the order of the README table; a method's guidance uses its own
 group(s). A method that declares its own parameters (``Method.params``) adds a group
 named after it while it is registered (:func:`groups`)."""
 
-CLOSED_LOOP_GROUPS = ("simulation", "vessel", "ilos", "pd", "walls", "outcome", "environment")
+CLOSED_LOOP_GROUPS = ("simulation", "vessel", "ilos", "pd", "walls", "outcome", "environment", "traffic", "perception")
 """Groups every run reads whatever its methods; every other group holds the parameters of methods (the groups a
 :class:`~mmg_casadi.guidance.methods.Method` lists), which a run may set only if one of its ships uses such a
 method (:func:`mmg_casadi.guidance.methods.check_used`)."""
@@ -72,13 +73,17 @@ class Param:
         registry sets it to the method's name.
     low_open, high_open : bool
         Whether the bounds are excluded.
-    kind : {"float", "int", "choice", "bool"}
-        Numbers are floats unless ``"int"``; ``"choice"`` takes one of ``choices``; ``"bool"`` true or false.
+    kind : {"float", "int", "choice", "bool", "text"}
+        Numbers are floats unless ``"int"``; ``"choice"`` takes one of ``choices``; ``"bool"`` true or false;
+        ``"text"`` a string that ``parse`` checks.
     choices : tuple of str
         Allowed values of a ``"choice"``.
     structural : bool
         Changes the shape of the compiled closed loop (a :class:`~mmg_casadi.closed_loop.layout.Layout` field) rather
         than a numeric input of it.
+    parse : callable, optional
+        For ``"text"``: ``parse(value, field, cls)`` returns the checked value or raises ``cls``; ``choices`` then
+        holds one string, the allowed values in words.
     """
 
     name: str
@@ -94,6 +99,7 @@ class Param:
     kind: str = "float"
     choices: tuple = ()
     structural: bool = False
+    parse: object = None
 
     def allowed(self) -> str:
         """Human-readable allowed values, as error messages print them.
@@ -113,6 +119,8 @@ class Param:
         """
         if self.kind == "choice":
             return f"one of: {', '.join(self.choices)}"
+        if self.kind == "text":
+            return self.choices[0]
         if self.kind == "bool":
             return "true or false"
         if self.kind == "int":
@@ -151,6 +159,8 @@ class Param:
         mmg_casadi.errors.ParameterError: settings.ilos_delta: expected a number in (0, inf) L, got 0
         """
         field = field or self.name
+        if self.kind == "text":
+            return self.parse(value, field, cls)
         if self.kind == "choice":
             if not isinstance(value, str) or value not in self.choices:
                 raise cls(field, self.allowed(), value)
@@ -423,10 +433,11 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "times the scorer's time", "our choice: off, so that the scorer adds at most 10 % to a study "
        "(benchmarks/colregs_scoring.py)", "outcome", kind="bool"),
     _P("targets", "avoid", None, None, "", "what the sampled target ships of the statistical study do: 'avoid' "
-       "(every ship uses the study's method) or 'hold' (ships other than the own ship hold course and speed, "
-       "method 'none'); only the study's sampled scenarios read it", "avoid: the paper's statistical analysis; "
-       "hold: the own ship alone responsible, as the Imazu study's held targets", "outcome", kind="choice",
-       choices=("avoid", "hold")),
+       "(every ship uses the study's method), 'hold' (ships other than the own ship hold course and speed, "
+       "method 'none') or a mix 'mix:avoid=0.6,hold=0.3,wrong=0.1' drawn per ship (behaviours avoid, hold, late, "
+       "wrong, intent: mmg_casadi.traffic); only the study's sampled scenarios read it", "avoid: the paper's "
+       "statistical analysis; hold: the own ship alone responsible, as the Imazu study's held targets; a mix: "
+       "issue 48", "outcome", kind="text", choices=(TARGETS_ALLOWED,), parse=parse_targets),
     _P("target_slowdown", 0.0, 0.0, 0.6, "", "fraction of its speed every sampled target ship takes off halfway "
        "along its route (a waypoint at the midpoint, the reduced speed on the leg to the goal); 0: constant speed; "
        "only the study's sampled scenarios read it", "0: the paper's constant-speed targets; at most 0.6 keeps "
@@ -436,6 +447,76 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "the first, agent2 the second, ...); only the study's sampled scenarios read it", "own: the paper's "
        "single-hull traffic; a list: mixed traffic (issue 25)", "outcome", kind="choice",
        choices=("own",) + VESSELS + tuple(f"{a},{b}" for a in VESSELS for b in VESSELS if a != b)),
+    # traffic: the behaviours a target of a mix draws (mmg_casadi.traffic), each from a uniform range
+    _P("target_late_delay_low", 2.0, 0.0, None, "L/U", "shortest delay of a target that gives way late: her method "
+       "takes charge only after a neighbour has been within R_safe this long", "our choice: a fifth of the about "
+       "10 L/U a crossing at the study's speeds takes from R_safe (15 L) to its CPA", "traffic"),
+    _P("target_late_delay_high", 8.0, 0.0, None, "L/U", "longest such delay (the delay is uniform between the two)",
+       "our choice: four fifths of that time, an alteration at a few ship lengths", "traffic"),
+    _P("target_wrong_turn_low_deg", 20.0, 0.0, 90.0, "deg", "smallest turn to port of a target that turns the wrong "
+       "way", "our choice: a readily apparent alteration (Rule 8(b); Cockcroft & Lameijer count those under 10 deg "
+       "unlikely to be seen)", "traffic", low_open=True),
+    _P("target_wrong_turn_high_deg", 60.0, 0.0, 90.0, "deg", "largest such turn (uniform between the two)",
+       "our choice: a bold alteration as Rule 16 asks of a give-way ship, in the wrong direction", "traffic",
+       low_open=True),
+    _P("target_wrong_dcpa", 4.0, 0.0, None, "L", "a target that turns the wrong way does so when a ship within "
+       "R_safe ahead of her beam (bearing within 112.5 deg of her bow) closes with a passing distance below this",
+       "our choice: twice the 2 L collision distance", "traffic", low_open=True),
+    _P("target_intent_time_low", 10.0, 0.0, None, "L/U", "earliest time of a target's change of mind (intent: one "
+       "alteration of course or speed)", "our choice: after the first 10 L/U, so that the change comes while "
+       "the study's encounters develop", "traffic"),
+    _P("target_intent_time_high", 60.0, 0.0, None, "L/U", "latest such time (uniform between the two)",
+       "our choice: at the study's speeds most encounters of environment 5 begin before 60 L/U", "traffic"),
+    _P("target_intent_course_low_deg", 30.0, 0.0, 180.0, "deg", "smallest course alteration of a change of mind "
+       "(to either side, drawn with equal chance; half the changes of mind are of course, half of speed)",
+       "our choice: a readily apparent alteration", "traffic"),
+    _P("target_intent_course_high_deg", 90.0, 0.0, 180.0, "deg", "largest such alteration", "our choice",
+       "traffic"),
+    _P("target_intent_speed_low", 0.5, 0.0, None, "", "smallest factor of a change of speed (the new speed is "
+       "clipped to the scenario speeds 0.2-1.2 U)", "our choice: half ahead", "traffic", low_open=True),
+    _P("target_intent_speed_high", 1.5, 0.0, None, "", "largest factor of a change of speed", "our choice",
+       "traffic", low_open=True),
+    # perception: the own ship's sensors and tracker (mmg_casadi.perception); off: perfect knowledge
+    _P("perception", "off", None, None, "", "what the own ship's method knows of the other ships: 'off' their true "
+       "states; 'ais' their AIS reports, dead-reckoned to the present; 'radar' a Kalman-filter track of radar "
+       "plots; 'ais-radar' a track fusing both (obstacles stay known from the chart; the COLREG scorer judges the "
+       "true states)", "off: the paper's perfect knowledge; the sensors of issue 48", "perception", kind="choice",
+       choices=("off", "ais", "radar", "ais-radar"), structural=True),
+    _P("perception_seed", 0, 0, None, "", "seed of the sensor noise (a study draws one per run from its own seed)",
+       "our choice", "perception", kind="int"),
+    _P("ais_class", "A", None, None, "", "AIS equipment of the target ships: 'A' (SOLAS ships) or 'B' (Class B "
+       "'CS')", "A: the study's ships are large merchant ships (ITU-R M.1371-5 Annex 1 Tables 1, 2)", "perception",
+       kind="choice", choices=("A", "B")),
+    _P("ais_interval_scale", 1.0, 0.0, None, "", "factor on the AIS reporting intervals of ITU-R M.1371-5; 0: a "
+       "report at every guidance step", "1: the nominal intervals (Annex 1 Table 1: 10 s, 6 s or 2 s by speed, "
+       "shorter while changing course)", "perception"),
+    _P("ais_latency_s", 2.0, 0.0, 60.0, "s", "time from a report's position fix to its use by the own ship",
+       "our choice: a report goes out in the SOTDMA slot after its fix (M.1371-5 Annex 2) and the display adds "
+       "its processing, about two seconds together", "perception"),
+    _P("ais_dropout", 0.1, 0.0, 1.0, "", "probability that a report is lost (independently per report)", "our "
+       "choice: about one report in ten lost to slot collisions and fading at a few nautical miles", "perception",
+       high_open=True),
+    _P("ais_position_sigma_m", 5.3, 0.0, None, "m", "standard deviation of a reported position, per axis",
+       "IMO MSC.112(73): GPS within 13 m (95 %) horizontally, 13 m / 2.45 per axis", "perception"),
+    _P("ais_sog_sigma_kn", 0.1, 0.0, None, "kn", "standard deviation of a reported speed over the ground",
+       "half the 0.2 kn resolution-and-accuracy figure of IMO A.824(19) for speed logs (95 %)", "perception"),
+    _P("ais_cog_sigma_deg", 1.0, 0.0, 45.0, "deg", "standard deviation of a reported course over the ground",
+       "our choice: the course of a GNSS receiver at sea speeds", "perception"),
+    _P("radar_range_sigma_m", 15.0, 0.0, None, "m", "standard deviation of a radar range", "IMO MSC.192(79) "
+       "§5.20: range within 30 m (95 %)", "perception"),
+    _P("radar_bearing_sigma_deg", 0.5, 0.0, 45.0, "deg", "standard deviation of a radar bearing", "IMO MSC.192(79) "
+       "§5.20: bearing within 1 deg (95 %)", "perception"),
+    _P("radar_range_nm", 11.0, 0.0, None, "NM", "range within which the radar detects a target", "IMO MSC.192(79) "
+       "Table 1: a ship over 5000 GT detected at 11 NM", "perception", low_open=True),
+    _P("radar_p_detect", 0.9, 0.0, 1.0, "", "probability that a target within range is detected on a scan",
+       "our choice: above the 0.8 that MSC.192(79) asks at the ranges of its Table 1, for targets well inside them",
+       "perception"),
+    _P("tracker_q", 0.05, 0.0, None, "m²/s³", "spectral density of the white acceleration noise of the tracker's "
+       "constant-velocity model", "our choice: accelerations of about 0.1 m/s², a merchant ship's in a turn, over "
+       "a few seconds", "perception", low_open=True),
+    _P("tracker_gate", 9.21, 0.0, None, "", "largest squared Mahalanobis distance of a radar plot a track takes "
+       "(nearest neighbour)", "chi-square 99 % of 2 degrees of freedom (Bar-Shalom, Li & Kirubarajan 2001)",
+       "perception", low_open=True),
     # environment (calm water by default, as in the paper; see mmg_casadi.vessel.environment)
     _P("current_speed", 0.0, 0.0, 1.0, "U", "speed of a uniform current (fraction of the design speed)",
        "our choice: calm water as in the paper; model Fossen 2021 §10.3 (mmg_casadi.vessel.environment)",

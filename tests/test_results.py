@@ -37,6 +37,8 @@ def _row(env: int, method: str, run: int, success: bool = True, **extra) -> dict
         "colregs_compliant": None if run % 3 == 0 else run % 3 == run % 3 // 2,
         "colregs_verdicts": ";".join(f"{j + 1}:give-way:0.5:8={int(j < run % 3 // 2)}" for j in range(run % 3)),
         "colregs_rule9": math.nan if run % 2 else 0.25 + run / 101,
+        "target_behaviours": "" if run % 2 else f"avoid;late {2 + run / 7:.2f};wrong 41.0;hold",
+        "perception_error": math.nan if run % 2 else 0.01 + run / 103,
     }
     for profile in ("published", "iitm_lab", "ntnu_2023"):
         row[f"colregs_verdicts_{profile}"] = row["colregs_verdicts"]
@@ -275,7 +277,12 @@ def test_table_of_the_previous_version_is_refused(tmp_path):
     version_5 = RUN_COLUMNS[:RUN_COLUMNS.index("colregs_verdicts_published")]
     path.write_text(",".join(version_5) + "\n")
     with pytest.raises(InputError, match="older version, without the columns colregs_verdicts_published, "
-                                         "colregs_verdicts_iitm_lab, colregs_verdicts_ntnu_2023;"):
+                                         "colregs_verdicts_iitm_lab, colregs_verdicts_ntnu_2023, target_behaviours, "
+                                         "perception_error;"):
+        ResultsTable(path).read()
+    version_6 = RUN_COLUMNS[:RUN_COLUMNS.index("target_behaviours")]
+    path.write_text(",".join(version_6) + "\n")
+    with pytest.raises(InputError, match="older version, without the columns target_behaviours, perception_error;"):
         ResultsTable(path).read()
 
 

@@ -306,6 +306,13 @@ RUN_COLUMN_DOCS = {
     "colregs_rule9": ("float", "COLREG Rule 9(a): the own ship's share of her time in a narrow channel on its "
                       "starboard side (kept from 0.9; `mmg_casadi.colregs.narrow_channel`); empty when she was "
                       "never in one"),
+    "target_behaviours": ("str", "what each target ship did, in ship order, `;`-separated: the study's `targets` "
+                          "(`avoid`, `hold`) or, with a mix, each target's draw: `late DELAY`, `wrong TURN`, "
+                          "`intent TIME course ±DEG` or `intent TIME speed FACTOR` (L/U, deg; "
+                          "`mmg_casadi.traffic.sample.describe`)"),
+    "perception_error": ("float, L", "with `perception`: the mean distance between where the own ship's method saw "
+                         "a target and where it was, over the time known targets were within R_safe; empty with "
+                         "perfect knowledge (`mmg_casadi.perception.layer.perception_error`)"),
 }
 
 ENCOUNTER_DOCS = {
@@ -447,6 +454,13 @@ def write_formats() -> None:
         "metadata": ("table", "none", "", "further static data kept as read (maritime-schema names: `id`, `mmsi`, "
                      "`imo`, `shipType`, `sogMax`, `dimensions.height`, ...) and written back by `convert`; "
                      "strings, finite numbers, booleans, arrays and tables (no datetimes)"),
+        "behaviour": ("string", "none (her method)", "",
+                      "a target's behaviour (`mmg_casadi.traffic`): `avoid` (her method), `hold` (course and speed), "
+                      "`late` (her method acts once it has wanted to for `late_delay`), `wrong` (to port by "
+                      "`wrong_turn` in a head-on or crossing risk), `intent` (holds her route, whose waypoint is "
+                      "where she changes her mind); not the first ship"),
+        "late_delay": ("number >= 0", "required with `late`", "L/U", "a late ship's delay"),
+        "wrong_turn": ("number in (0, 90]", "required with `wrong`", "deg", "a wrong-way ship's turn to port"),
         "track": ("string or table", "none (simulated)", "L/U, L",
                   "a replayed ship's recorded track: a CSV file with the columns `t, x, y` (relative to the scenario "
                   "file's folder) or `{t = [...], x = [...], y = [...]}`, times increasing from at or before 0; the "

@@ -23,6 +23,8 @@ import numpy as np
 from mmg_casadi.guidance import methods
 from mmg_casadi.guidance.ilos import validate_waypoints
 from mmg_casadi.closed_loop.replay import track_values
+from mmg_casadi.perception import layer as perception_layer
+from mmg_casadi.traffic import behaviour as traffic_behaviour
 from mmg_casadi.params import PARAMETERS, resolve
 from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel, ship_size
 from mmg_casadi.vessel.ship import ShipParams
@@ -150,6 +152,16 @@ class Layout:
         the fleet step.
     command_rpm : bool
         The commanded ships also order their propeller speed (the state row ``command_rpm``).
+    perception : str
+        What the own ship's method knows of the other ships (:mod:`mmg_casadi.perception`): ``"off"`` (the truth;
+        the layout's step and key as without this field), ``"ais"``, ``"radar"`` or ``"ais-radar"``: every ship has
+        the rows :func:`mmg_casadi.perception.layer.rows` after her others, the step the inputs
+        :data:`~mmg_casadi.perception.layer.INPUTS` after the others. Not with the fleet step nor a smooth layout.
+    traffic : tuple of int
+        Indices of the target ships with a behaviour (:mod:`mmg_casadi.traffic`), increasing, not the own ship:
+        each has the numeric inputs :data:`~mmg_casadi.traffic.behaviour.SHIP_INPUTS` and every ship the rows
+        :data:`~mmg_casadi.traffic.behaviour.ROWS`. Empty: the layout's step and key are as without this field.
+        Not with the fleet step nor a smooth layout.
     """
 
     methods: tuple
@@ -171,6 +183,8 @@ class Layout:
     options: tuple = ()
     commanded: tuple = ()
     command_rpm: bool = False
+    perception: str = "off"
+    traffic: tuple = ()
 
     def __post_init__(self):
         if not 0 <= self.n_land <= self.n_walls:
@@ -186,6 +200,14 @@ class Layout:
             raise ValueError("commanded: expected no neighbour slots (the fleet step takes no commands)")
         if self.command_rpm and not c:
             raise ValueError("command_rpm: expected False without commanded ships")
+        object.__setattr__(self, "traffic", tuple(int(i) for i in self.traffic))
+        tr = self.traffic
+        if list(tr) != sorted(set(tr)) or any(not 0 < i < self.n_ships for i in tr) or set(tr) & set(self.replay):
+            raise ValueError(f"traffic: expected increasing indices of target ships in [1, {self.n_ships}) that are "
+                             f"not replayed, got {tr}")
+        perception_layer.rows(self.perception)  # checks the mode
+        if (tr or self.perception != "off") and (self.neighbours or self.smooth is not None):
+            raise ValueError("perception, traffic: expected an exact unrolled layout (no neighbour slots, no smoothing)")
 
     def option(self, name: str):
         """The value of the structural method parameter ``name`` in this layout (:attr:`options`).
@@ -269,13 +291,15 @@ class Layout:
 
     @functools.cached_property
     def ship_state(self) -> tuple[str, ...]:
-        """Names of one ship's rows of the scenario state: :data:`SHIP_STATE`, then :attr:`memory`."""
-        return SHIP_STATE + self.memory
+        """Names of one ship's rows of the scenario state: :data:`SHIP_STATE`, then :attr:`memory`, the traffic rows
+        (with :attr:`traffic`) and the perception rows (with :attr:`perception`)."""
+        return (SHIP_STATE + self.memory + (traffic_behaviour.ROWS if self.traffic else ())
+                + perception_layer.rows(self.perception))
 
     @property
     def ns(self) -> int:
         """Rows of one ship's block of the scenario state."""
-        return len(SHIP_STATE) + len(self.memory)
+        return len(self.ship_state)
 
     @property
     def nx(self) -> int:
@@ -380,7 +404,14 @@ class Layout:
         """Rows of the parameter vector."""
         return (len(GLOBAL_PARAMS) + self.n_ships * (self.ship_params_size)
                 + 3 * self.n_obstacles + 4 * self.n_walls + (len(ENV_INPUTS) if self.disturbed else 0)
-                + len(self.method_inputs) + self.track_params_size)
+                + len(self.method_inputs) + self.track_params_size + self.extra_params_size)
+
+    @property
+    def extra_params_size(self) -> int:
+        """Rows of the parameter vector after the tracks: the traffic ships' inputs and the perception inputs."""
+        size = len(self.traffic) * len(traffic_behaviour.SHIP_INPUTS) + (len(traffic_behaviour.INPUTS) if self.traffic
+                                                                          else 0)
+        return size + (len(perception_layer.INPUTS) if self.perception != "off" else 0)
 
     @property
     def track_params_size(self) -> int:
@@ -418,6 +449,10 @@ class Layout:
             s += "_m" + hashlib.sha256(repr(self.options).encode()).hexdigest()[:8]
         if self.commanded:
             s += "".join(f"_c{i}" for i in self.commanded) + ("rpm" if self.command_rpm else "")
+        if self.traffic:
+            s += "_t" + ("all" if self.traffic == tuple(range(1, self.n_ships)) else "_".join(map(str, self.traffic)))
+        if self.perception != "off":
+            s += "_p" + self.perception.replace("-", "")
         return (f"{meth}_o{self.n_obstacles}_w{self.n_walls}_k{self.max_path}_v{self.vo_candidates}{self.vo_cone}"
                 f"{'h' if self.vo_hold else ''}{s}")
 
@@ -522,6 +557,11 @@ class Layout:
                                        "x": [p[i + 1 + T + k] for k in range(T)],
                                        "y": [p[i + 1 + 2 * T + k] for k in range(T)]}
                 i += 1 + 3 * T
+        if self.traffic:
+            out["traffic"], i = traffic_behaviour.split(self, p, i)
+        if self.perception != "off":
+            out["perception"] = {k: p[i + n] for n, k in enumerate(perception_layer.INPUTS)}
+            i += len(perception_layer.INPUTS)
         assert i == self.np
         return out
 
@@ -593,6 +633,10 @@ def pack_params(layout: Layout, globals_: dict, ships: list[dict], obstacles=(),
     vals += [float(globals_[name]) for name in layout.method_inputs]
     for i in layout.replay:  # replayed ships: ships[i]["track"] = (t, x, y), the parameter vector's last block
         vals += track_values(*ships[i]["track"], layout.max_track)
+    if layout.traffic:  # then the traffic ships' behaviours and the perception inputs
+        vals += traffic_behaviour.values(layout, ships, globals_)
+    if layout.perception != "off":
+        vals += perception_layer.input_values(globals_, load_vessel(layout.unit_vessel()).ship)
     p = np.array(vals)
     assert p.size == layout.np
     return p
@@ -630,7 +674,15 @@ def step_values(resolved: dict) -> dict:
     for name in ("engine_rate_rpm_s", "engine_lag_s", "engine_dead_slow", "engine_rpm_max", "grounding_margin",
                  *LAND_INPUTS, *FAIRWAY_INPUTS):
         out[name] = float(resolved[name])
+    for name in PERCEPTION_VALUES + ("target_wrong_dcpa",):  # in the table's units; pack_params converts them
+        out[name] = resolved[name] if name == "ais_class" else float(resolved[name])
     return out
+
+
+PERCEPTION_VALUES = ("ais_class", "ais_interval_scale", "ais_latency_s", "ais_dropout", "ais_position_sigma_m",
+                     "ais_sog_sigma_kn", "ais_cog_sigma_deg", "radar_range_sigma_m", "radar_bearing_sigma_deg",
+                     "radar_range_nm", "radar_p_detect", "tracker_q", "tracker_gate")
+"""Table parameters the perception inputs are made of (:func:`mmg_casadi.perception.layer.input_values`)."""
 
 
 def is_disturbed(resolved: dict) -> bool:

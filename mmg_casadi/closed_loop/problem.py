@@ -19,7 +19,9 @@ from mmg_casadi.closed_loop.step import build_closed_loop_step
 from mmg_casadi.errors import ParameterError, ScenarioError
 from mmg_casadi.guidance import methods
 from mmg_casadi.limits import MAX_UNROLLED_OBSTACLE_PAIRS, check_size, check_steps, check_unrolled
-from mmg_casadi.params import resolve
+from mmg_casadi.params import PARAMETERS, resolve
+from mmg_casadi.perception.layer import unused_parameter
+from mmg_casadi.traffic import behaviour as traffic_behaviour
 from mmg_casadi.vessel.library import DEFAULT as DEFAULT_VESSEL, load_vessel, ship_size
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
 
@@ -108,7 +110,7 @@ class ClosedLoopModel:
         numpy.ndarray (nx,)
             Scenario state at t = 0.
         """
-        return state_.initial_state(self.layout, ships)
+        return state_.initial_state(self.layout, ships, self.params)
 
     def ship_rows(self, X) -> np.ndarray:
         """Ship rows of scenario states: ``(N, NS)`` for one state, ``(T, N, NS)`` for columns ``(nx, T)``.
@@ -249,6 +251,18 @@ def build_problem(sc, params: dict | None = None, *, error=None, commanded=(), c
         raise (error or ParameterError)("fleet_from_ships", f"more than the {len(sc.ships)} ships of a scenario "
                                         "with commanded ships (the fleet step takes no commands)",
                                         resolved["fleet_from_ships"])
+    traffic = tuple(i for i, s in enumerate(sc.ships) if traffic_behaviour.ship_inputs(s) is not None)
+    unused = unused_parameter(resolved)
+    if unused is not None:
+        raise (error or ParameterError)(unused, f"its default {PARAMETERS[unused].default!r} with perception = "
+                                        f"{resolved['perception']!r} (a sensor it does not use)", resolved[unused])
+    if not traffic and resolved["target_wrong_dcpa"] != PARAMETERS["target_wrong_dcpa"].default:
+        raise (error or ParameterError)("target_wrong_dcpa", f"its default {PARAMETERS['target_wrong_dcpa'].default} "
+                                        "without a target that turns the wrong way", resolved["target_wrong_dcpa"])
+    if (traffic or resolved["perception"] != "off") and len(sc.ships) >= resolved["fleet_from_ships"]:
+        raise (error or ParameterError)("fleet_from_ships", f"more than the {len(sc.ships)} ships of a scenario with "
+                                        "target behaviours or perception (the fleet step has neither)",
+                                        resolved["fleet_from_ships"])
     vessels = tuple(getattr(s, "vessel", None) or resolved["vessel"] for s in sc.ships)
     for i, v in enumerate(vessels):
         load_vessel(v, f"ships[{i}].vessel")
@@ -267,11 +281,14 @@ def build_problem(sc, params: dict | None = None, *, error=None, commanded=(), c
                     neighbours=resolved["neighbour_slots"] if fleet else 0,
                     n_land=len(land), **_replay_layout(sc, replayed, resolved, error or ParameterError, fleet),
                     cv_extremis="colregs-vortex" in methods_ and resolved["cv_speed_extremis"] > 0,
-                    options=_options(methods_, resolved), commanded=commanded, command_rpm=bool(command_rpm))
+                    options=_options(methods_, resolved), commanded=commanded, command_rpm=bool(command_rpm),
+                    perception=resolved["perception"], traffic=traffic)
     model = ClosedLoopModel(layout, resolved)
     ships = tuple(_ship_inputs(_engine_speed(s), load_vessel(v).ship, v, unit=vessels[0])
                   for s, v in zip(sc.ships, vessels))
     ships = tuple(_with_track(s, d) for s, d in zip(sc.ships, ships))
+    ships = tuple({**d, "behaviour": traffic_behaviour.ship_inputs(s)} if i in traffic else d
+                  for i, (s, d) in enumerate(zip(sc.ships, ships)))
     obstacles = [(o.position[0], o.position[1], o.radius) for o in sc.obstacles]
     return Problem(model, model.initial_state(list(ships)), model.pack(list(ships), obstacles, walls), ships)
 

@@ -10,11 +10,12 @@ from __future__ import annotations
 import numpy as np
 
 from mmg_casadi.closed_loop.layout import Layout
+from mmg_casadi.perception import layer as perception_layer
 from mmg_casadi.vessel.library import load_vessel
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed, scene_scales
 
 
-def initial_state(layout: Layout, ships: list[dict]) -> np.ndarray:
+def initial_state(layout: Layout, ships: list[dict], params: dict | None = None) -> np.ndarray:
     """Scenario state at t = 0: each ship at ``start`` with ``heading`` (rad) and surge speed ``speed`` × U_des
     (the ship's own design speed; the state holds it in the own ship's, :meth:`Layout.unit_vessel`).
 
@@ -25,6 +26,10 @@ def initial_state(layout: Layout, ships: list[dict]) -> np.ndarray:
     ships : list of dict
         Per ship ``start`` (L), ``heading`` (rad), ``speed`` (fraction of U_des), ``path`` (L) and optionally
         ``n_rpm`` (rev/min, the engine's starting speed; default the propeller speed of a steady ``speed``).
+    params : dict, optional
+        The resolved parameter set (default the table's): with perception, its ``perception_seed`` seeds every
+        ship's noise generator and its AIS parameters give each ship's first report time
+        (:func:`mmg_casadi.perception.layer.initial_rows`).
 
     Returns
     -------
@@ -64,6 +69,15 @@ def initial_state(layout: Layout, ships: list[dict]) -> np.ndarray:
         if "command_rpm" in layout.memory:  # a commanded ship's propeller order starts at her engine's speed
             row[col("command_rpm")] = row[col("n_prop")]
         x[layout.ship_block(i)] = row
+    if layout.perception != "off":
+        if params is None:
+            from mmg_casadi.params import resolve
+            params = resolve()
+        for i, s in enumerate(ships):
+            _, mu = scene_scales(load_vessel(layout.vessel(i)).ship, unit)
+            T = perception_layer.initial_interval(params, unit, float(s["speed"]) * mu)
+            for name, v in perception_layer.initial_rows(layout.perception, params["perception_seed"], i, T).items():
+                x[layout.row(name, i)] = v
     return x
 
 

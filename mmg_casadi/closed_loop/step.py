@@ -39,7 +39,11 @@ import casadi as ca
 
 from mmg_casadi.closed_loop.layout import COMMAND_ROWS, STOPPED, Layout
 from mmg_casadi.closed_loop.neighbours import dispatch_args, within_range
+from mmg_casadi.closed_loop.behaviours import gate as traffic_gate
 from mmg_casadi.closed_loop.replay import replay_update
+from mmg_casadi.closed_loop.sensing import perceive
+from mmg_casadi.perception import layer as perception_layer
+from mmg_casadi.traffic import behaviour as traffic_behaviour
 from mmg_casadi.errors import ParameterError
 from mmg_casadi.guidance import fairway, hazards, methods
 from mmg_casadi.guidance.heading_control import pd_heading
@@ -111,15 +115,33 @@ def build_closed_loop_step(layout: Layout, *, n_sub: int = 1, sparse: bool = Fal
     x = ca.SX.sym("x", layout.nx)
     p = ca.SX.sym("p", layout.np)
     c = _step_context(layout, x, p)
+    seen, sensed = _perceived(layout, c)
     x_next, aux = [], []
     for i in range(layout.n_ships):
-        new, aux_i = _ship_update(layout, i, c, mmgs[layout.vessel(i)], n_sub)
-        x_next.append(ca.if_else(c["sailing"][i], new, c["X"][i]))
+        ci = c if seen is None or i else _step_context(layout, x, p, shared=seen)  # the own ship's view
+        new, aux_i = _ship_update(layout, i, ci, mmgs[layout.vessel(i)], n_sub)
+        x_next.append(_with_rows(layout, ca.if_else(c["sailing"][i], new, c["X"][i]), sensed, i))
         aux.append(aux_i)
     x_new = _bookkeeping(layout, c, x_next)
     # common-subexpression elimination: the same operations without repeats, so results are bit-identical
     return ca.Function(f"closed_loop_{layout.key()}", [x, p], [x_new, ca.horzcat(*aux)], ["x", "p"],
                        ["x_next", "aux"], {"cse": True})
+
+
+def _perceived(layout: Layout, c: dict):
+    """With perception (:mod:`mmg_casadi.perception.layer`): the own ship's view of the ships (the shared vector of
+    the sparse step) and every ship's perception rows after the step; ``(None, None)`` without."""
+    if layout.perception == "off":
+        return None, None
+    return perceive(layout, c)
+
+
+def _with_rows(layout: Layout, xi, sensed, i: int):
+    """Ship ``i``'s rows ``xi`` with its perception rows (the last ones) replaced by ``sensed[i]``."""
+    if sensed is None:
+        return xi
+    k = len(perception_layer.rows(layout.perception))
+    return ca.vertcat(xi[:layout.ns - k], sensed[i])
 
 
 def _models(layout: Layout) -> dict:
@@ -254,9 +276,11 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         past = ca.logic_and(Xi[S_["idx"]] > Pi["n_path"] - 1.5, beyond)
         to_goal = terms["wp_next"] - pos[i]
         psi_ilos = ca.if_else(past, ca.atan2(to_goal[1], to_goal[0]), psi_ilos)
+    psi_plain = terms["psi_d"]  # ILOS as a ship of the method "none" steers it (a traffic ship that holds)
     if layout.disturbed:  # optional crab-angle compensation: steer the course, psi_d = chi_d - beta
         u_g, v_g = environment.ground_velocity(Xi[S_["u"]], Xi[S_["v"]], psi[i], E[0], E[1])
-        psi_ilos = psi_ilos - E[4] * environment.crab_angle(u_g, v_g)
+        crab = E[4] * environment.crab_angle(u_g, v_g)
+        psi_ilos, psi_plain = psi_ilos - crab, psi_plain - crab
     if spec.turn_limit:
         # the method's moderate turn also while ILOS steers, except within R_safe of the waypoint: there a ship
         # that arrives off her track could circle a waypoint that lies inside her moderate turning circle for ever
@@ -313,6 +337,14 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
             e = w_react * e_f + (1 - w_react) * ca.vertcat(ca.cos(psi_ilos), ca.sin(psi_ilos))
             psi_d = ca.atan2(e[1], e[0])
 
+    traffic_rows = ()
+    if i in layout.traffic and nb is None:  # a target's behaviour (mmg_casadi.traffic.behaviour)
+        n_nb = nb_pos.size2()
+        psi_d, w_react, traffic_rows = traffic_gate(
+            c, i, Xi, S_, psi_d=psi_d, w_react=w_react, psi_route=psi_ilos, psi_plain=psi_plain, nb_pos=nb_pos,
+            nb_vel=nb_vel, active=active if M else ca.SX(1, 0), n_ships=min(N, n_nb + 1))
+    elif layout.traffic:
+        traffic_rows = [Xi[S_[k]] for k in traffic_behaviour.ROWS]
     r_own = _own_time(layout, vessel, Xi[S_["r"]])
     delta_c = pd_heading(psi[i], psi_d, r_own, P["kp"], P["kd"], P["delta_max"])
     n_c = n_service  # the leg's propeller speed, unless the method in charge commands another
@@ -329,11 +361,14 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     y_int_next = Xi[S_["y_int"]] + dt * y_int_rate * (1 - w_react)
     pos_next = ca.vertcat(xm_next[S_["x"]], xm_next[S_["y"]])
     idx_next, reached = switch_waypoint(pos_next, Pi["path"], Xi[S_["idx"]], Pi["n_path"], P["goal_tolerance"])
+    idx_plain = idx_next
     if spec.goal_capture:
         # a waypoint before the final one that the ship passed abeam outside the acceptance radius (avoiding
         # something) counts as passed: she does not turn back to it
         abeam = ca.logic_and(Xi[S_["idx"]] < Pi["n_path"] - 1.5, beyond)
         idx_next = ca.if_else(ca.logic_and(abeam, idx_next < Xi[S_["idx"]] + 0.5), Xi[S_["idx"]] + 1, idx_next)
+    if i in layout.traffic and nb is None:  # a holding traffic ship switches her waypoints as a ship of "none"
+        idx_next = ca.if_else(P["traffic"][i]["hold"] > 0.5, idx_plain, idx_next)
     t_next = t + dt
 
     u_n, v_n, r_n, x_n, y_n = (xm_next[S_[k]] for k in ("u", "v", "r", "x", "y"))
@@ -371,6 +406,8 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         ca.if_else(better, pos_next[1], Xi[S_["y_best"]]),
         Xi[S_["reactive_time"]] + w_react * dt,
         *memory,
+        *traffic_rows,
+        *[Xi[S_[k]] for k in perception_layer.rows(layout.perception)],  # replaced by the step's perception update
     )
     return new, ca.vertcat(delta_c, psi_d, terms["y_e"], w_react)
 
@@ -562,17 +599,23 @@ def _sparse_functions(layout: Layout, n_sub: int) -> tuple[ca.Function, ca.Funct
     rows_next = [nxt[i * NS:(i + 1) * NS] for i in range(N)]
     x, p = ca.MX.sym("x", layout.nx), ca.MX.sym("p", layout.np)
     sh_mx, sailing, counts = pre(x, p)
+    seen_mx, sensed_mx = sh_mx, None
+    if layout.perception != "off":  # the own ship's view of the others and every ship's perception rows
+        seen, sensed = perceive(layout, cs)
+        seen_mx, sensed_mx = ca.Function(f"sense_{key}", [xs, ps, sh], [seen, ca.vertcat(*sensed)],
+                                         {"cse": True})(x, p, sh_mx)
     news, auxs, rudders = [], [], []
     for i in range(N):
         new, aux_i = _ship_update(layout, i, cs, mmgs[layout.vessel(i)], n_sub, sparse=True)
+        view = seen_mx if i == 0 else sh_mx
         run = ca.Function(f"sail{i}_{key}", [xs, ps, sh], [new, aux_i], {"cse": True})
         hold = ca.Function(f"hold{i}_{key}", [xs, ps, sh], [cs["X"][i], ca.DM.nan(NAUX, 1)])
-        new_mx, aux_mx = ca.Function.conditional(f"ship{i}_{key}", [hold], run)(sailing[i], x, p, sh_mx)
+        new_mx, aux_mx = ca.Function.conditional(f"ship{i}_{key}", [hold], run)(sailing[i], x, p, view)
         news.append(new_mx)
         auxs.append(aux_mx)
         steer = ca.Function(f"steer{i}_{key}", [xs, ps, sh], [aux_i[0]], {"cse": True})
         idle = ca.Function(f"idle{i}_{key}", [xs, ps, sh], [ca.DM.nan(1, 1)])
-        rudders.append(ca.Function.conditional(f"rudder{i}_{key}", [idle], steer)(sailing[i], x, p, sh_mx))
+        rudders.append(ca.Function.conditional(f"rudder{i}_{key}", [idle], steer)(sailing[i], x, p, view))
     # closest approach and collisions: a ship absent at the start of the step (or past the horizon) keeps its row
     nxt_mx = ca.vertcat(*news)
     r0, r1 = layout.column(_ROW[0]), layout.column(_ROW[-1]) + 1
@@ -584,7 +627,9 @@ def _sparse_functions(layout: Layout, n_sub: int) -> tuple[ca.Function, ca.Funct
                              {"cse": True})
         keep = ca.Function(f"keep{i}_{key}", [xs, ps, nxt], [rows_next[i][r0:r1]])
         row = ca.Function.conditional(f"row{i}_{key}", [keep], update)(counts[i], x, p, nxt_mx)
-        rows.append(stop(x[layout.ship_block(i)], ca.vertcat(news[i][:r0], row, news[i][r1:])))
+        k = len(perception_layer.rows(layout.perception))
+        tail = [news[i][r1:NS - k], sensed_mx[i * k:(i + 1) * k]] if k else [news[i][r1:]]
+        rows.append(stop(x[layout.ship_block(i)], ca.vertcat(news[i][:r0], row, *tail)))
     step = ca.Function(f"closed_loop_{key}", [x, p], [ca.vertcat(*rows), ca.horzcat(*auxs)],
                        ["x", "p"], ["x_next", "aux"])
     guidance = ca.Function(f"guidance_{key}", [x, p], [ca.horzcat(*rudders)], ["x", "p"], ["delta_c"])

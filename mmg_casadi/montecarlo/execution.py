@@ -80,6 +80,9 @@ from mmg_casadi.montecarlo.failures import failure_mechanism, turn_time_90, unav
 from mmg_casadi.montecarlo.results import RUN_COLUMNS
 from mmg_casadi.montecarlo.sampling import sample_scenario
 from mmg_casadi.params import PARAMETERS, resolve
+from mmg_casadi.perception.layer import perception_error, run_seed
+from mmg_casadi.traffic.mix import is_mix
+from mmg_casadi.traffic.sample import describe, draw_behaviours
 from mmg_casadi.scenarios.scenario import Scenario, scenario_from_dict, with_params
 from mmg_casadi.vessel.library import pair_collision_distance, ship_size
 
@@ -125,10 +128,77 @@ def sampled_scenario(environment: int, method: str, run: int, base_seed: int = 0
     targets = (params or {}).get("targets", PARAMETERS["targets"].default)
     slowdown = (params or {}).get("target_slowdown", PARAMETERS["target_slowdown"].default)
     hulls = (params or {}).get("target_vessels", PARAMETERS["target_vessels"].default)
+    drawn = run_behaviours(environment, run, base_seed, sample.n_ships - 1, params) if is_mix(targets) else None
     sc = scenario_from_dict(sample.to_scenario_dict(method=method, targets=targets, target_slowdown=slowdown,
-                                                    target_vessels=hulls),
+                                                    target_vessels=hulls, behaviours=drawn),
                             source=f"env{environment}/{method}/run{run}")
+    if (params or {}).get("perception", "off") != "off":  # the run's own sensor noise, drawn from the study's seed
+        params = {**params, "perception_seed": run_perception_seed(environment, run, base_seed, params)}
     return with_params(sc, params)
+
+
+def run_behaviours(environment: int, run: int, base_seed: int, n_targets: int, params: dict | None) -> list[dict]:
+    """The drawn behaviours of a run's targets under the study's ``params`` (:func:`mmg_casadi.traffic.sample.draw_behaviours`).
+
+    Parameters
+    ----------
+    environment, run, base_seed : int
+        The run.
+    n_targets : int
+        Its target ships.
+    params : dict or None
+        The study's parameter values (``targets`` and the ranges of group ``traffic``; the table's defaults for the
+        rest).
+
+    Returns
+    -------
+    list of dict
+        One per target.
+    """
+    return draw_behaviours(environment, run, base_seed, n_targets, resolve(params))
+
+
+def run_perception_seed(environment: int, run: int, base_seed: int, params: dict | None) -> int:
+    """The ``perception_seed`` of a run: drawn from the study's seed and the run (the same for every method), with
+    the study's ``perception_seed`` as a further word of the sequence (:func:`mmg_casadi.perception.layer.run_seed`).
+
+    Parameters
+    ----------
+    environment, run, base_seed : int
+        The run.
+    params : dict or None
+        The study's parameter values.
+
+    Returns
+    -------
+    int
+        The seed.
+    """
+    return run_seed(int(base_seed) + (1 << 32) * int((params or {}).get("perception_seed", 0)), environment, run)
+
+
+def target_behaviours(environment: int, run: int, base_seed: int, n_ships: int, params: dict | None) -> str:
+    """The ``target_behaviours`` cell of a run: each target's drawn behaviour (a mix,
+    :func:`mmg_casadi.traffic.sample.describe`) or the study's one behaviour for every target.
+
+    Parameters
+    ----------
+    environment, run, base_seed : int
+        The run.
+    n_ships : int
+        Its ships, the own ship included.
+    params : dict or None
+        The study's parameter values.
+
+    Returns
+    -------
+    str
+        One ``;``-separated entry per target.
+    """
+    targets = (params or {}).get("targets", PARAMETERS["targets"].default)
+    if is_mix(targets):
+        return describe(run_behaviours(environment, run, base_seed, n_ships - 1, params))
+    return ";".join([targets] * (n_ships - 1))
 
 
 def _non_default(params: dict | None) -> dict:
@@ -458,6 +528,7 @@ def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT
         for col, i in enumerate(idx):
             row = run_outcome(problems[i].layout, XF[:, col], problems[i].params)
             row["guidance_call_us"] = us
+            row["perception_error"] = perception_error(layout, XF[:, col])
             if explain:
                 row.update(explain_run(scenarios[i], problems[i].model, XF[:, col], *hist.column(col)))
                 if histories is not None:
@@ -505,7 +576,8 @@ def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params
     results = run_scenarios(scenarios, chunk=chunk, histories=histories)
     rows = []
     for r, res, d in zip(runs, results, env):
-        row = {"environment": int(environment), "method": method, "run": r, "seed": int(base_seed), **res, **d}
+        row = {"environment": int(environment), "method": method, "run": r, "seed": int(base_seed), **res, **d,
+               "target_behaviours": target_behaviours(environment, r, base_seed, res["n_ships"], params)}
         rows.append({c: row.get(c) for c in RUN_COLUMNS})
     return rows
 

@@ -31,19 +31,21 @@ RUN_COLUMNS: tuple[str, ...] = (
     "current_speed", "current_direction_deg", "wind_speed", "wind_direction_deg",
     "failure_mechanism", "colregs_risky", "colregs_lawful", "colregs_score", "colregs_compliant",
     "colregs_verdicts", "colregs_rule9", "colregs_verdicts_published", "colregs_verdicts_iitm_lab",
-    "colregs_verdicts_ntnu_2023",
+    "colregs_verdicts_ntnu_2023", "target_behaviours", "perception_error",
 )
 """Columns of the results CSV, in order (version :data:`RESULTS_VERSION`)."""
 
-RESULTS_VERSION = 6
+RESULTS_VERSION = 7
 """Version of :data:`RUN_COLUMNS`: 2 added ``failure_mechanism``, ``colregs_compliant`` and
 ``colregs_encounters`` (the legacy scorer); 3 added the encounter scorer's ``colregs_risky``, ``colregs_lawful``
 and ``colregs_score``; 4 dropped the legacy scorer (``colregs_encounters``; ``colregs_compliant`` is now the
 encounter scorer's run-level flag) and added ``colregs_verdicts``
 (:mod:`mmg_casadi.montecarlo.encounter_summary`); 5 added ``colregs_rule9`` (the own ship's Rule 9(a) score in a
 narrow channel, :mod:`mmg_casadi.colregs.narrow_channel`); 6 added ``colregs_verdicts_<profile>``, the verdicts
-under every scoring profile (:data:`mmg_casadi.montecarlo.execution.PROFILE_COLUMNS`); a table of another version is
-refused, never misread."""
+under every scoring profile (:data:`mmg_casadi.montecarlo.execution.PROFILE_COLUMNS`); 7 added ``target_behaviours``
+(what each target ship did, :mod:`mmg_casadi.traffic`) and ``perception_error`` (the mean distance between where the
+own ship's method saw the targets within R_safe and where they were, :mod:`mmg_casadi.perception`; empty with
+perfect knowledge); a table of another version is refused, never misread."""
 
 _RETIRED_COLUMNS = frozenset({"colregs_encounters"})  # columns of older versions, no longer written
 
@@ -60,7 +62,8 @@ _INT_COLUMNS = frozenset({"environment", "run", "seed", "n_ships", "n_obstacles"
                           "colregs_lawful"})
 _BOOL_COLUMNS = frozenset({"success", "fleet_success", "colregs_compliant"})
 _STR_COLUMNS = frozenset({"method", "failure", "failure_pair", "failure_mechanism", "colregs_verdicts",
-                          "colregs_verdicts_published", "colregs_verdicts_iitm_lab", "colregs_verdicts_ntnu_2023"})
+                          "colregs_verdicts_published", "colregs_verdicts_iitm_lab", "colregs_verdicts_ntnu_2023",
+                          "target_behaviours"})
 _FLOAT_COLUMNS = frozenset(RUN_COLUMNS) - _INT_COLUMNS - _BOOL_COLUMNS - _STR_COLUMNS
 
 METRICS: tuple[str, ...] = ("time_to_goal", "ce", "mcte", "guidance_call_us")

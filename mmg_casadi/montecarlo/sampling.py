@@ -35,6 +35,8 @@ from mmg_casadi.readers import is_finite
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
 from mmg_casadi.montecarlo.land_sampling import ENVIRONMENT as LAND_ENVIRONMENT, sample_strait
 from mmg_casadi.params import PARAMETERS
+from mmg_casadi.traffic.mix import is_mix
+from mmg_casadi.traffic.sample import apply_behaviours, needs_waypoint
 
 ENVIRONMENTS: dict[int, tuple[int, int]] = {1: (1, 2), 2: (2, 3), 3: (2, 5), 4: (3, 7), 5: (4, 9)}
 """Environment number -> (static obstacles, dynamic ships besides the own ship), from the paper's table."""
@@ -220,7 +222,7 @@ class SampledScenario:
                          collision_distance: float = PARAMETERS["collision_distance"].default,
                          targets: str = PARAMETERS["targets"].default,
                          target_slowdown: float = PARAMETERS["target_slowdown"].default,
-                         target_vessels: str = PARAMETERS["target_vessels"].default) -> dict:
+                         target_vessels: str = PARAMETERS["target_vessels"].default, behaviours=None) -> dict:
         """The scenario in the shape of a TOML scenario file, so a run can be replayed on its own.
 
         Ships are named ``agent0`` (own ship), ``agent1``, ...; headings are written in degrees; every ship
@@ -244,6 +246,10 @@ class SampledScenario:
             Hulls of the ships but the own ship (parameter ``target_vessels``): ``"own"`` writes none (every ship
             the table's ``vessel``, the scenario unchanged); a vessel name or two separated by a comma, taken in
             turn. Each ship's ``speed`` is a fraction of its own hull's design speed.
+        behaviours : list of dict, optional
+            With ``targets`` a mix: the drawn behaviour of every target
+            (:func:`mmg_casadi.traffic.sample.draw_behaviours`), written into each target's ship table
+            (:func:`~mmg_casadi.traffic.sample.apply_behaviours`); required with a mix, refused otherwise.
 
         Returns
         -------
@@ -267,10 +273,15 @@ class SampledScenario:
         """
         if not isinstance(method, str) or not method:
             raise InputError("method", "a non-empty method name", method)
-        if targets not in PARAMETERS["targets"].choices:
-            raise InputError("targets", f"one of: {', '.join(PARAMETERS['targets'].choices)}", targets)
+        targets = PARAMETERS["targets"].check(targets, cls=InputError)
         target_slowdown = PARAMETERS["target_slowdown"].check(target_slowdown, cls=InputError)
         target_vessels = PARAMETERS["target_vessels"].check(target_vessels, cls=InputError)
+        if is_mix(targets) != (behaviours is not None):
+            raise InputError("behaviours", "the drawn behaviours of the targets with a mix of targets, and nothing "
+                             "otherwise", targets)
+        if is_mix(targets) and target_slowdown > 0 and needs_waypoint(targets):
+            raise InputError("target_slowdown", "0 with a mix of targets that changes its mind (intent)",
+                             target_slowdown)
         settings = {"method": method}
         for name, value in (("dt", dt), ("t_max", t_max), ("r_safe", r_safe),
                             ("collision_distance", collision_distance)):
@@ -299,6 +310,9 @@ class SampledScenario:
                 mid = 0.5 * (self.starts[i] + self.goals[i])
                 ship["waypoints"].insert(0, [float(x) for x in mid])
                 ship["speeds"] = [ship["speed"], (1.0 - target_slowdown) * ship["speed"]]
+        if behaviours is not None:
+            apply_behaviours(ships, behaviours, goal_tolerance=PARAMETERS["goal_tolerance"].default,
+                             waypoint=needs_waypoint(targets))
         obstacles = [{"position": [float(x) for x in p], "radius": float(self.obstacle_radius)}
                      for p in self.obstacles]
         out = {"settings": settings, "ships": ships, "obstacles": obstacles, "walls": []}

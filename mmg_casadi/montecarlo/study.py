@@ -66,6 +66,9 @@ from mmg_casadi.montecarlo.execution import (DEFAULT_CHUNK, _non_default, _run_d
 from mmg_casadi.montecarlo.results import ResultsTable, summarize
 from mmg_casadi.montecarlo.sampling import ALL_ENVIRONMENTS, parse_envs
 from mmg_casadi.params import PARAMETERS, diff, resolve
+from mmg_casadi.perception.layer import unused_parameter
+from mmg_casadi.traffic.mix import is_mix
+from mmg_casadi.traffic.sample import RANGES as TRAFFIC_RANGES
 from mmg_casadi.progress import progress_bar
 from mmg_casadi.scenarios.scenario import dump_scenario
 
@@ -143,6 +146,7 @@ def check_study_args(*, runs=200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS,
     chunk = _check_int("chunk", chunk, 1)
     resolved = resolve(params, prefix="params.")
     method_registry.check_run((*methods, "none"), params)  # targets that hold use "none"
+    _check_traffic_and_sensors(resolved)
     ranges = DisturbanceRanges(current=current, wind=wind)
     for name, rng in (("current", ranges.current), ("wind", ranges.wind)):
         for key in (f"{name}_speed", f"{name}_direction_deg"):
@@ -154,6 +158,19 @@ def check_study_args(*, runs=200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS,
         check_ray_address(address)
     return {"runs": runs, "envs": envs, "methods": methods, "base_seed": base_seed, "workers": workers,
             "batch_size": batch_size, "chunk": chunk, "params": resolved, "ranges": ranges}
+
+
+def _check_traffic_and_sensors(resolved: dict) -> None:
+    """Refuse a behaviour range without a mix of targets and a sensor parameter the study's perception does not use."""
+    if not is_mix(resolved["targets"]):
+        for k in (*TRAFFIC_RANGES, "target_wrong_dcpa"):
+            if resolved[k] != PARAMETERS[k].default:
+                raise InputError(f"params.{k}", f"its default {PARAMETERS[k].default} unless targets is a mix "
+                                 "(mix:NAME=P,...; it sets what the targets of a mix draw)", resolved[k])
+    unused = unused_parameter(resolved)
+    if unused is not None:
+        raise InputError(f"params.{unused}", f"its default {PARAMETERS[unused].default!r} with perception = "
+                         f"{resolved['perception']!r} (a sensor it does not use)", resolved[unused])
 
 
 def run_study(out_dir, *, runs: int = 200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS, base_seed: int = 0,

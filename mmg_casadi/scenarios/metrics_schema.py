@@ -57,6 +57,8 @@ def _enum(values, *, null=False) -> dict:
 def _param_schema(p) -> dict:
     if p.kind == "choice":
         return {"enum": list(p.choices)}
+    if p.kind == "text":
+        return {"type": "string"}
     return {"type": {"float": "number", "int": "integer", "bool": "boolean"}[p.kind]}
 
 

@@ -22,6 +22,9 @@ times non-dimensional (L/U). A scenario file looks like::
     # vessel = "kcs"             # optional: the ship's hull (default the table's 'vessel')
     # speeds = [1.0]             # optional: speed on the leg to each waypoint (default: speed on every leg)
     # route = "plan"             # optional: plan the route around the land (default settings.route, "as-given")
+    # behaviour = "late"         # a target only: avoid | hold | late | wrong | intent (mmg_casadi.traffic)
+    # late_delay = 4.0           #   late: her method acts once it has wanted to this long (L/U)
+    # wrong_turn = 40.0          #   wrong: the turn to port (deg) in a head-on or crossing risk
     # track = "target.csv"       # a target only, instead of start ... speeds and method: it replays this
                                  #   recorded track (t, x, y) in time (mmg_casadi.scenarios.tracks)
     # length_m = 122.0           # optional: the ship's own length and beam in metres (default: its vessel's);
@@ -80,17 +83,15 @@ from mmg_casadi.scenarios.geojson_land import chart_land
 from mmg_casadi.scenarios.scenario_checks import (_POINT, _as_point, _as_points, _name, _point, _points,
                                                  _range_text, _ranged, _required, _string, _table, _tables,
                                                  check_metadata, toml_key, valid_polygon)
-from mmg_casadi.scenarios.scenario_write import dump_scenario, scenario_to_dict  # noqa: F401  (re-exported)
 from mmg_casadi.scenarios.tracks import Track, parse_track
+from mmg_casadi.traffic import behaviour as traffic_behaviour
+from mmg_casadi.scenarios.scenario_write import (PARAM_KEYS, SETTINGS_FIELDS, dump_scenario,  # noqa: F401
+                                                 scenario_to_dict)  # (dump_scenario, scenario_to_dict re-exported)
 from mmg_casadi.params import PARAMETERS, check_value, resolve
 
-SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_tolerance")
-"""Table parameters that are fields of :class:`Settings`."""
-PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
-"""Table parameters kept in :attr:`Settings.params`."""
 SETTINGS_KEYS = ("method",) + tuple(PARAMETERS)
 SHIP_KEYS = ("name", "start", "heading", "speed", "waypoints", "method", "stays", "vessel", "speeds", "length_m",
-             "beam_m", "metadata", "track", "route")
+             "beam_m", "metadata", "track", "route", "behaviour", "late_delay", "wrong_turn")
 REPLAY_KEYS = ("name", "track", "stays", "vessel", "length_m", "beam_m", "metadata")
 """Keys of a replayed ship (one with a ``track``): its start, heading, speed and goal come from the track."""
 OBSTACLE_KEYS = ("position", "radius")
@@ -211,6 +212,13 @@ class ShipSpec:
         :func:`check_metadata`): for a maritime-schema ship its ``static`` object without ``name`` and the
         length and width, e.g. ``id``, ``mmsi``, ``shipType``, ``sogMax``, ``dimensions.height``. Left out of the
         hash.
+    behaviour : str or None, optional
+        A target's behaviour (:data:`~mmg_casadi.traffic.behaviour.FILE_BEHAVIOURS`, :mod:`mmg_casadi.traffic`);
+        ``None``: she sails with her method as always.
+    late_delay : float or None, optional
+        A late ship's delay (L/U).
+    wrong_turn_deg : float or None, optional
+        A wrong-way ship's turn to port (deg).
     track : Track or None, optional
         A replayed ship's recorded track (:mod:`mmg_casadi.scenarios.tracks`): it follows the track instead of
         being simulated, and ``start``, ``heading_deg``, ``speed`` and ``waypoints`` (its last position) are the
@@ -240,6 +248,9 @@ class ShipSpec:
     metadata: dict = field(default_factory=dict, hash=False)
     track: Track | None = None
     route: str | None = None
+    behaviour: str | None = None
+    late_delay: float | None = None
+    wrong_turn_deg: float | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "start", _as_point(self.start))
@@ -470,7 +481,7 @@ def _ship(t: dict, i: int, base_dir=None) -> ShipSpec:
     metadata = check_metadata(t["metadata"], f"{p}.metadata") if "metadata" in t else {}
     route = _string(t["route"], f"{p}.route", PARAMETERS["route"].choices) if "route" in t else None
     return ShipSpec(name, start, heading, speed, waypoints, method, stays, vessel, speeds, metadata=metadata,
-                    route=route, **size)
+                    route=route, **size, **traffic_behaviour.file_behaviour(t, p, i))
 
 
 def _replayed_ship(t: dict, i: int, base_dir=None) -> ShipSpec:

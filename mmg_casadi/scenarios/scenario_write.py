@@ -11,8 +11,10 @@ import tomli_w
 
 from mmg_casadi.params import PARAMETERS
 
-_SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_tolerance")
-PARAM_KEYS = tuple(k for k in PARAMETERS if k not in _SETTINGS_FIELDS)
+SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_tolerance")
+"""Table parameters that are fields of :class:`~mmg_casadi.scenarios.scenario.Settings` (the others are kept in its
+``params``)."""
+PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
 """Table parameters written from :attr:`Settings.params <mmg_casadi.scenarios.scenario.Settings.params>`."""
 
 
@@ -36,6 +38,9 @@ def _ship_dict(ship) -> dict:
     for k in ("length_m", "beam_m", "route"):
         if getattr(ship, k) is not None:
             d[k] = getattr(ship, k)
+    for k, name in (("behaviour", "behaviour"), ("late_delay", "late_delay"), ("wrong_turn_deg", "wrong_turn")):
+        if getattr(ship, k, None) is not None:
+            d[name] = getattr(ship, k)
     if ship.metadata:
         d["metadata"] = copy.deepcopy(ship.metadata)
     return d
