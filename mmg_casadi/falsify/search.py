@@ -1,0 +1,337 @@
+"""Three searches of the envelope at the same simulation budget: random sampling, CMA-ES and the gradient.
+
+Every search spends at most ``budget`` simulations (one closed-loop rollout each; a gradient evaluation is one
+rollout forward and its adjoint backward, counted as one simulation and timed apart) and records each in its trace.
+
+``random``
+    the Monte Carlo study's own sample (:meth:`~mmg_casadi.falsify.envelope.Envelope.sample`, runs ``0..budget-1``
+    of the base seed): what a study of that size finds.
+``cmaes``
+    screening, then local searches. The first ``screen`` share of the budget is the same random sample; from its
+    least robust runs that did not fail (each once, in order) a CMA-ES (the ``cma`` package, Hansen's reference
+    implementation) searches the unit cube of the envelope with step ``sigma0``, each candidate projected onto the
+    envelope, on the exact robustness, until a generation holds a failure or the local search has spent
+    ``local_budget`` simulations; then the next start. CMA-ES rather than differential evolution: with ~70
+    coordinates its population is ``4 + 3 ln d`` ≈ 17 candidates, where differential evolution's default is
+    ``15 d`` ≈ 1000 — half the budget before its first generation.
+``gradient``
+    the same screening, then from the same starts a projected gradient descent on the smooth margin
+    (:class:`~mmg_casadi.falsify.gradient.MarginGradient`): a step of length ``step`` (unit cube, Euclidean) along
+    the negative normalised gradient, projected onto the envelope; a step that lowers the smooth margin is kept and
+    the next one is 1.5 times longer, else it is halved; a local search ends at a failure, after ``local_budget``
+    simulations or when the step falls below ``min_step``. Collision and grounding only: the COLREG scorer has no
+    derivative.
+
+Failures are those of the exact robustness (:mod:`~mmg_casadi.falsify.robustness`); a search keeps every one it
+meets, the screening's included.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mmg_casadi.errors import InputError
+from mmg_casadi.falsify.envelope import Envelope
+from mmg_casadi.falsify.robustness import Evaluation, check_objective, evaluate
+from mmg_casadi.guidance import methods as registry
+
+SEARCHES: tuple[str, ...] = ("gradient", "cmaes", "random")
+"""The searches (module docstring)."""
+BATCH = 32
+"""Simulations rolled out together by the random sample and the screening."""
+PROGRESS_EVERY = 100
+"""A progress line every this many simulations."""
+
+
+@dataclass(frozen=True)
+class SearchConfig:
+    """Budget and settings of the searches (module docstring).
+
+    Parameters
+    ----------
+    budget : int
+        Simulations per search.
+    seed : int
+        Base seed of the random sample (the study's sampler) and of CMA-ES.
+    screen : float
+        Share of the budget spent on the random screening of the local searches.
+    local_budget : int
+        Simulations per local search.
+    sigma0 : float
+        CMA-ES's initial step in the unit cube.
+    step : float
+        The gradient search's initial step length in the unit cube.
+    min_step : float
+        The step length below which a gradient search stops.
+
+    Examples
+    --------
+    >>> SearchConfig(budget=100).screened
+    25
+    >>> SearchConfig(budget=0)
+    Traceback (most recent call last):
+    ...
+    mmg_casadi.errors.InputError: budget: expected an integer >= 1, got 0
+    """
+
+    budget: int = 2000
+    seed: int = 0
+    screen: float = 0.25
+    local_budget: int = 48
+    sigma0: float = 0.05
+    step: float = 0.05
+    min_step: float = 2e-3
+
+    def __post_init__(self):
+        for name, low in (("budget", 1), ("seed", 0), ("local_budget", 2)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
+                raise InputError(name, f"an integer >= {low}", v)
+        for name in ("screen", "sigma0", "step", "min_step"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= 1:
+                raise InputError(name, "a number in (0, 1]", v)
+
+    @property
+    def screened(self) -> int:
+        """Simulations of the screening."""
+        return max(1, int(round(self.screen * self.budget)))
+
+
+@dataclass
+class SearchResult:
+    """What one search found.
+
+    Parameters
+    ----------
+    search : str
+        One of :data:`SEARCHES`.
+    method : str
+        The method searched.
+    envelope : Envelope
+        The envelope searched.
+    objective : str
+        The objective.
+    config : SearchConfig
+        Budget and settings.
+    evaluations : list of Evaluation
+        Every simulation, in order.
+    trace : list of dict
+        Per simulation: ``index``, ``phase`` (``sample``, ``screen`` or ``local``), ``start`` (local search number,
+        -1 outside one), ``robustness``, ``smooth`` (the gradient search's soft-min; NaN elsewhere), ``failure``
+        and ``seconds`` since the search began.
+    seconds : float
+        Wall time of the search.
+    """
+
+    search: str
+    method: str
+    envelope: Envelope
+    objective: str
+    config: SearchConfig
+    evaluations: list = field(default_factory=list)
+    trace: list = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def failures(self) -> list[Evaluation]:
+        """The evaluations that failed, in order."""
+        return [e for e in self.evaluations if e.failure]
+
+    @property
+    def best(self) -> Evaluation:
+        """The least robust evaluation."""
+        return min(self.evaluations, key=lambda e: e.robustness)
+
+    def to_dict(self) -> dict:
+        """Everything but the envelope as plain values (JSON with NaN and Infinity), for a checkpoint.
+
+        Returns
+        -------
+        dict
+            ``search``, ``method``, ``objective``, ``config``, ``seconds``, ``trace`` and ``evaluations``.
+        """
+        return {"search": self.search, "method": self.method, "objective": self.objective,
+                "config": vars(self.config).copy(), "seconds": self.seconds, "trace": self.trace,
+                "evaluations": [{"theta": e.theta.tolist(), "robustness": e.robustness, "failure": e.failure,
+                                 "row": e.row, "detail": e.detail, "geometry": e.geometry}
+                                for e in self.evaluations]}
+
+    @classmethod
+    def from_dict(cls, d: dict, envelope: Envelope) -> "SearchResult":
+        """The result :meth:`to_dict` wrote.
+
+        Parameters
+        ----------
+        d : dict
+            What :meth:`to_dict` returned.
+        envelope : Envelope
+            The envelope searched.
+
+        Returns
+        -------
+        SearchResult
+            The same result.
+        """
+        evs = [Evaluation(np.array(e["theta"], float), float(e["robustness"]), bool(e["failure"]), e["row"],
+                          e["detail"], e["geometry"]) for e in d["evaluations"]]
+        return cls(d["search"], d["method"], envelope, d["objective"], SearchConfig(**d["config"]), evs,
+                   list(d["trace"]), float(d["seconds"]))
+
+
+class _Run:
+    """Bookkeeping of one search: the budget, the trace and the evaluations."""
+
+    def __init__(self, result: SearchResult, params: dict | None, progress=None):
+        self.r, self.params, self.progress = result, params, progress
+        self.t0 = time.perf_counter()
+
+    @property
+    def left(self) -> int:
+        return self.r.config.budget - len(self.r.evaluations)
+
+    def record(self, ev: Evaluation, phase: str, start: int = -1, smooth: float = math.nan) -> Evaluation:
+        self.r.evaluations.append(ev)
+        self.r.trace.append({"index": len(self.r.trace), "phase": phase, "start": start,
+                             "robustness": ev.robustness, "smooth": smooth, "failure": ev.failure,
+                             "seconds": time.perf_counter() - self.t0})
+        n = len(self.r.evaluations)
+        if self.progress is not None and (n % PROGRESS_EVERY == 0 or n == self.r.config.budget):
+            fails = sum(t["failure"] for t in self.r.trace)
+            self.progress(f"  {self.r.method} {self.r.search}: {n}/{self.r.config.budget} simulations, {fails} "
+                          f"failures, {time.perf_counter() - self.t0:.0f} s")
+        return ev
+
+    def simulate(self, thetas, phase: str, start: int = -1) -> list[Evaluation]:
+        thetas = list(thetas)[:self.left]
+        out = []
+        for b in range(0, len(thetas), BATCH):
+            evs = evaluate(self.r.envelope, thetas[b:b + BATCH], self.r.method, self.r.objective, self.params)
+            out += [self.record(ev, phase, start) for ev in evs]
+        return out
+
+
+def _random(run: _Run, n: int, phase: str) -> list[Evaluation]:
+    env, cfg = run.r.envelope, run.r.config
+    return run.simulate((env.sample(k, cfg.seed) for k in range(n)), phase)
+
+
+def _starts(screened: list[Evaluation]) -> list[np.ndarray]:
+    """The local searches' starts: the screened runs that did not fail, least robust first."""
+    return [e.theta for e in sorted((e for e in screened if not e.failure), key=lambda e: e.robustness)]
+
+
+def _cmaes(run: _Run) -> None:
+    import cma  # the derivative-free search's dependency, loaded when it runs
+
+    env, cfg = run.r.envelope, run.r.config
+    lo = [None if p else 0.0 for p in env.periodic]
+    hi = [None if p else 1.0 for p in env.periodic]
+    for k, theta0 in enumerate(_starts(_random(run, cfg.screened, "screen"))):
+        if run.left <= 0:
+            break
+        es = cma.CMAEvolutionStrategy(env.to_unit(theta0), cfg.sigma0,
+                                      {"bounds": [lo, hi], "seed": cfg.seed * 100_003 + k + 1, "verbose": -9})
+        spent = 0
+        while spent < cfg.local_budget and run.left > 0:
+            U = es.ask()
+            if len(U) > run.left:
+                break
+            thetas, values, keep = [], [], []
+            for u in U:
+                th, inside = env.project(env.from_unit(u))
+                keep.append(inside)
+                if inside:
+                    thetas.append(th)
+            evs = iter(run.simulate(thetas, "local", k))
+            values = [next(evs).robustness if inside else 1e3 for inside in keep]
+            spent += len(thetas)
+            es.tell(U, values)
+            if min(values) < 0.0:
+                break
+
+
+def _gradient(run: _Run) -> None:
+    from mmg_casadi.falsify.gradient import MarginGradient
+
+    env, cfg = run.r.envelope, run.r.config
+    grad = MarginGradient(env, run.r.method, run.r.objective, run.params)
+    span = env.high - env.low
+
+    def step(theta):
+        ev, smooth, g = grad(theta)
+        return ev, smooth, g * span  # the gradient in unit coordinates
+
+    for k, theta in enumerate(_starts(_random(run, cfg.screened, "screen"))):
+        if run.left <= 0:
+            break
+        ev, smooth, g = step(theta)
+        run.record(ev, "local", k, smooth)
+        alpha, spent = cfg.step, 1
+        while not ev.failure and spent < cfg.local_budget and run.left > 0 and alpha >= cfg.min_step:
+            norm = float(np.linalg.norm(g))
+            if not math.isfinite(smooth) or norm == 0.0:
+                break
+            trial, inside = env.project(env.from_unit(env.to_unit(theta) - alpha * g / norm))
+            if not inside:
+                alpha *= 0.5
+                continue
+            ev_t, smooth_t, g_t = step(trial)
+            run.record(ev_t, "local", k, smooth_t)
+            spent += 1
+            if ev_t.failure or smooth_t < smooth:
+                theta, ev, smooth, g, alpha = trial, ev_t, smooth_t, g_t, alpha * 1.5
+            else:
+                alpha *= 0.5
+
+
+def run_search(search: str, method: str, envelope: Envelope, objective: str = "collision",
+               config: SearchConfig = SearchConfig(), params: dict | None = None, progress=None) -> SearchResult:
+    """Run one search (module docstring) and return what it found.
+
+    Parameters
+    ----------
+    search : str
+        One of :data:`SEARCHES`.
+    method : str
+        Every ship's method.
+    envelope : Envelope
+        The envelope searched.
+    objective : str, default "collision"
+        One of :data:`~mmg_casadi.falsify.robustness.OBJECTIVES`.
+    config : SearchConfig
+        Budget and settings.
+    params : dict, optional
+        Parameter overrides of every run.
+    progress : callable, optional
+        Called with a line every :data:`PROGRESS_EVERY` simulations.
+
+    Returns
+    -------
+    SearchResult
+        Every evaluation and the trace.
+    """
+    if search not in SEARCHES:
+        raise InputError("search", f"one of: {', '.join(SEARCHES)}", search)
+    check_objective(objective, envelope.environment)
+    registry.get(method, "method")
+    if search == "gradient" and objective == "colregs":
+        raise InputError("search", "cmaes or random for the colregs objective (the COLREG scorer has no "
+                         "derivative)", search)
+    result = SearchResult(search, method, envelope, objective, config)
+    run = _Run(result, params, progress)
+    if search == "random":
+        _random(run, config.budget, "sample")
+    elif search == "cmaes":
+        _cmaes(run)
+    else:
+        _gradient(run)
+    if run.left > 0 and search != "random":  # every start used: the rest of the budget samples on
+        more = [envelope.sample(k, config.seed) for k in range(config.screened, config.screened + run.left)]
+        run.simulate(more, "screen")
+    result.seconds = time.perf_counter() - run.t0
+    return result
