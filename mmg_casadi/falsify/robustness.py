@@ -129,8 +129,8 @@ class Evaluation:
         ``kind``, ``time`` (L/U), ``margin`` per kind; for ``colregs`` the encounter's ``other``, ``role``,
         ``rule``.
     geometry : dict or None
-        For a failure, the encounter geometry clustered by :mod:`~mmg_casadi.falsify.report`
-        (:func:`failure_geometry`).
+        The encounter geometry where the robustness was attained (:func:`failure_geometry`): for a failure what
+        :mod:`~mmg_casadi.falsify.report` clusters, else the closest call's (None when nothing counted).
     """
 
     theta: np.ndarray
@@ -217,7 +217,7 @@ def judge(problem, scenario: Scenario, theta, x_final, t, states, objective: str
         rho, detail = _least_margin(margins, kinds, t)
     fail = bool(rho < 0.0)
     ev = Evaluation(np.asarray(theta, float), float(rho), fail, row, detail)
-    if fail:
+    if detail.get("time") is not None:  # a failure's geometry, or that of the closest call
         ev.geometry = failure_geometry(scenario, t, states, detail, float(problem.params["r_safe"]))
     return ev
 

@@ -10,16 +10,18 @@ rollout forward and its adjoint backward, counted as one simulation and timed ap
     screening, then local searches. The first ``screen`` share of the budget is the same random sample; from its
     least robust runs that did not fail (each once, in order) a CMA-ES (the ``cma`` package, Hansen's reference
     implementation) searches the unit cube of the envelope with step ``sigma0``, each candidate projected onto the
-    envelope, on the exact robustness, until a generation holds a failure or the local search has spent
-    ``local_budget`` simulations; then the next start. CMA-ES rather than differential evolution: with ~70
+    envelope, on the exact robustness, with a population of ``popsize`` (a local search), until a generation holds a
+    failure or the local search has spent ``local_budget`` simulations; then the next start. CMA-ES rather than differential evolution: with ~70
     coordinates its population is ``4 + 3 ln d`` ≈ 17 candidates, where differential evolution's default is
     ``15 d`` ≈ 1000 — half the budget before its first generation.
 ``gradient``
-    the same screening, then from the same starts a projected gradient descent on the smooth margin
-    (:class:`~mmg_casadi.falsify.gradient.MarginGradient`): a step of length ``step`` (unit cube, Euclidean) along
-    the negative normalised gradient, projected onto the envelope; a step that lowers the smooth margin is kept and
-    the next one is 1.5 times longer, else it is halved; a local search ends at a failure, after ``local_budget``
-    simulations or when the step falls below ``min_step``. Collision and grounding only: the COLREG scorer has no
+    the same screening, then from the same starts (each skipped when its closest call has the geometry of a
+    failure found already) a projected gradient descent on the smooth margin
+    (:class:`~mmg_casadi.falsify.gradient.MarginGradient`): along the negative gradient (unit cube, Euclidean) a
+    step of Polyak's length, the one at which the linearised robustness reaches ``-target`` (the value sought is
+    known: below zero), at most ``step``, projected onto the envelope; a step that lowers the smooth margin is kept
+    (and a halved step length doubled again, up to Polyak's), else the length is halved; a local search ends at a
+    failure, after ``local_budget`` simulations or when the step falls below ``min_step``. Collision and grounding only: the COLREG scorer has no
     derivative.
 
 Failures are those of the exact robustness (:mod:`~mmg_casadi.falsify.robustness`); a search keeps every one it
@@ -63,8 +65,12 @@ class SearchConfig:
         Simulations per local search.
     sigma0 : float
         CMA-ES's initial step in the unit cube.
+    popsize : int
+        CMA-ES's population (a local search: smaller than its default of ``4 + 3 ln d``).
     step : float
-        The gradient search's initial step length in the unit cube.
+        The gradient search's longest step in the unit cube.
+    target : float
+        The robustness a gradient step aims at, below zero (Polyak's step; the coordinate's unit, L).
     min_step : float
         The step length below which a gradient search stops.
 
@@ -81,17 +87,19 @@ class SearchConfig:
     budget: int = 2000
     seed: int = 0
     screen: float = 0.25
-    local_budget: int = 48
+    local_budget: int = 24
     sigma0: float = 0.05
-    step: float = 0.05
-    min_step: float = 2e-3
+    popsize: int = 8
+    step: float = 0.1
+    target: float = 0.5
+    min_step: float = 1e-3
 
     def __post_init__(self):
-        for name, low in (("budget", 1), ("seed", 0), ("local_budget", 2)):
+        for name, low in (("budget", 1), ("seed", 0), ("local_budget", 2), ("popsize", 2)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
                 raise InputError(name, f"an integer >= {low}", v)
-        for name in ("screen", "sigma0", "step", "min_step"):
+        for name in ("screen", "sigma0", "step", "min_step", "target"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= 1:
                 raise InputError(name, "a number in (0, 1]", v)
@@ -220,9 +228,17 @@ def _random(run: _Run, n: int, phase: str) -> list[Evaluation]:
     return run.simulate((env.sample(k, cfg.seed) for k in range(n)), phase)
 
 
-def _starts(screened: list[Evaluation]) -> list[np.ndarray]:
-    """The local searches' starts: the screened runs that did not fail, least robust first."""
-    return [e.theta for e in sorted((e for e in screened if not e.failure), key=lambda e: e.robustness)]
+def _starts(run: _Run, screened: list[Evaluation]):
+    """The local searches' starts: the screened runs that did not fail, least robust first, each skipped when its
+    closest call has the geometry of a failure the search has already found (:mod:`~mmg_casadi.falsify.report`):
+    a local search from there would most likely find that failure again."""
+    from mmg_casadi.falsify.report import geometry_distance
+
+    for e in sorted((e for e in screened if not e.failure), key=lambda e: e.robustness):
+        if e.geometry is not None and any(geometry_distance(e.geometry, f.geometry) <= 1.0
+                                          for f in run.r.failures):
+            continue
+        yield e.theta
 
 
 def _cmaes(run: _Run) -> None:
@@ -231,11 +247,12 @@ def _cmaes(run: _Run) -> None:
     env, cfg = run.r.envelope, run.r.config
     lo = [None if p else 0.0 for p in env.periodic]
     hi = [None if p else 1.0 for p in env.periodic]
-    for k, theta0 in enumerate(_starts(_random(run, cfg.screened, "screen"))):
+    for k, theta0 in enumerate(_starts(run, _random(run, cfg.screened, "screen"))):
         if run.left <= 0:
             break
         es = cma.CMAEvolutionStrategy(env.to_unit(theta0), cfg.sigma0,
-                                      {"bounds": [lo, hi], "seed": cfg.seed * 100_003 + k + 1, "verbose": -9})
+                                      {"bounds": [lo, hi], "seed": cfg.seed * 100_003 + k + 1, "verbose": -9,
+                                       "popsize": cfg.popsize})
         spent = 0
         while spent < cfg.local_budget and run.left > 0:
             U = es.ask()
@@ -266,27 +283,31 @@ def _gradient(run: _Run) -> None:
         ev, smooth, g = grad(theta)
         return ev, smooth, g * span  # the gradient in unit coordinates
 
-    for k, theta in enumerate(_starts(_random(run, cfg.screened, "screen"))):
+    for k, theta in enumerate(_starts(run, _random(run, cfg.screened, "screen"))):
         if run.left <= 0:
             break
         ev, smooth, g = step(theta)
         run.record(ev, "local", k, smooth)
-        alpha, spent = cfg.step, 1
-        while not ev.failure and spent < cfg.local_budget and run.left > 0 and alpha >= cfg.min_step:
+        spent, shrink = 1, 1.0
+        while not ev.failure and spent < cfg.local_budget and run.left > 0:
             norm = float(np.linalg.norm(g))
             if not math.isfinite(smooth) or norm == 0.0:
                 break
+            # Polyak's step: the length at which the linearised robustness reaches -target, at most `step`
+            alpha = shrink * min(cfg.step, (ev.robustness + cfg.target) / norm)
+            if alpha < cfg.min_step:
+                break
             trial, inside = env.project(env.from_unit(env.to_unit(theta) - alpha * g / norm))
             if not inside:
-                alpha *= 0.5
+                shrink *= 0.5
                 continue
             ev_t, smooth_t, g_t = step(trial)
             run.record(ev_t, "local", k, smooth_t)
             spent += 1
             if ev_t.failure or smooth_t < smooth:
-                theta, ev, smooth, g, alpha = trial, ev_t, smooth_t, g_t, alpha * 1.5
+                theta, ev, smooth, g, shrink = trial, ev_t, smooth_t, g_t, min(1.0, 2.0 * shrink)
             else:
-                alpha *= 0.5
+                shrink *= 0.5
 
 
 def run_search(search: str, method: str, envelope: Envelope, objective: str = "collision",
