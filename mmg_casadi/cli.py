@@ -28,7 +28,7 @@ from pathlib import Path
 from mmg_casadi import __version__
 from mmg_casadi import cli_falsify, compiled
 from mmg_casadi.cli_args import (_CliError, _Parser, _add_determinism, _add_methods, _add_params, _add_plugin,
-                                 _add_quiet, _float, _int, _path, _setting)
+                                 _add_quiet, _error_line, _float, _int, _path, _setting)
 from mmg_casadi.errors import InputError, RunError
 from mmg_casadi.guidance import methods as registry, plugins
 from mmg_casadi.io import check_output, write_json, write_text
@@ -706,15 +706,15 @@ def main(argv=None) -> int:
                 if getattr(a, "check_determinism", False):
                     return _check_determinism(a, handlers[a.command])
     except _CliError as e:
-        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        print(_error_line(e), file=sys.stderr)
         return 2
     except InputError as e:
         if a is not None and not isinstance(e, _CliError):
             e = InputError(_flag(e.field, a), e.allowed, e.got)
-        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        print(_error_line(e), file=sys.stderr)
         return 2
     except RunError as e:
-        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        print(_error_line(e), file=sys.stderr)
         return 1
     except KeyboardInterrupt as e:
         what = ("finished results are kept; rerun the same command to resume" if _resumable(a) else

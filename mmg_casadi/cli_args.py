@@ -21,6 +21,15 @@ class _CliError(InputError):
         return f"{self.allowed} (see '{self.field} --help')"
 
 
+_LINE_BREAKS = {c: c.encode("unicode_escape").decode("ascii")
+                for c in "\n\r\v\f\x1c\x1d\x1e\x85\u2028\u2029"}
+
+
+def _error_line(e) -> str:
+    """``mmg-casadi: error: …`` as one line: a line break inside a given value (e.g. a file name) is escaped."""
+    return "mmg-casadi: error: " + str(e).translate(str.maketrans(_LINE_BREAKS))
+
+
 class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line and exit status 2."""
 

@@ -7,6 +7,7 @@ Collect (each part is replaced only when it is given, so one study can be added 
     python -m studies.results collect --statistics DIR ... # mmg-casadi study statistics ... --out DIR, one per profile
     python -m studies.results collect --imazu DIR ...      # mmg-casadi study imazu ... --out DIR, one per profile
     python -m studies.results collect --claims docs/claims.md
+    python -m studies.results collect --labelled DIR       # mmg-casadi study labelled --out DIR
     python -m studies.results collect --tasks              # runs README's five tasks, records what they print
     python -m studies.results render                       # rewrites README's generated blocks from the file
 
@@ -135,28 +136,52 @@ def collect_statistics(out: Path) -> list[dict]:
     """
     study = json.loads((out / "study.json").read_text())
     params = study.get("params", {})
-    profile = params.get("colregs_profile")
     with open(out / "summary.csv", newline="") as f:
         summary = list(csv.DictReader(f))
     with open(out / "colregs.csv", newline="") as f:
         groups = list(csv.DictReader(f))
+    config = {}
+    if (out / "metrics.json").exists():
+        config = json.loads((out / "metrics.json").read_text()).get("config", {})
+    # colregs.csv has a row group per scoring profile the study scored (colregs_all_profiles: all three)
+    profiles = list(dict.fromkeys(r.get("profile") or params.get("colregs_profile") for r in groups))
     rows = []
-    for s in summary:
-        env, method = int(s["environment"]), s["method"]
-        g = {r["group"]: r for r in groups if int(r["environment"]) == env and r["method"] == method}
-        rows.append({
-            "profile": profile, "method": method, "environment": env, "runs": int(s["runs"]),
-            "seed": study.get("config", {}).get("base_seed", 0),
-            "success": round(float(s["success_rate"]), 4),
-            "success_ci": [round(float(s["success_ci_low"]), 4), round(float(s["success_ci_high"]), 4)],
-            "encounters": int(g["all"]["n"]), "kept": round(float(g["all"]["rate"]), 4),
-            "kept_ci": [round(float(g["all"]["ci_low"]), 4), round(float(g["all"]["ci_high"]), 4)],
-            "score": round(float(g["all"]["score_mean"]), 3),
-            "roles": {r: round(float(g[r]["rate"]), 4) for r in ROLES if r in g and g[r]["rate"] not in ("", "nan")},
-            "command": _command_of(out, f"mmg-casadi study statistics --runs {s['runs']} --envs {env} --methods "
-                                        f"... --set colregs_profile={profile} --out DIR"),
-        })
+    for profile in profiles:
+        for s in summary:
+            env, method = int(s["environment"]), s["method"]
+            g = {r["group"]: r for r in groups if int(r["environment"]) == env and r["method"] == method
+                 and (r.get("profile") or params.get("colregs_profile")) == profile}
+            rows.append({
+                "profile": profile, "method": method, "environment": env, "runs": int(s["runs"]),
+                "seed": config.get("base_seed", study.get("config", {}).get("base_seed", 0)),
+                "success": round(float(s["success_rate"]), 4),
+                "success_ci": [round(float(s["success_ci_low"]), 4), round(float(s["success_ci_high"]), 4)],
+                "encounters": int(g["all"]["n"]), "kept": round(float(g["all"]["rate"]), 4),
+                "kept_ci": [round(float(g["all"]["ci_low"]), 4), round(float(g["all"]["ci_high"]), 4)],
+                "score": round(float(g["all"]["score_mean"]), 3),
+                "roles": {r: round(float(g[r]["rate"]), 4) for r in ROLES
+                          if r in g and g[r]["rate"] not in ("", "nan")},
+                "command": _command_of(out, f"mmg-casadi study statistics --runs {s['runs']} --envs {env} --methods "
+                                            f"... --set colregs_all_profiles=true --out DIR"),
+            })
     return rows
+
+
+def collect_labelled(out: Path) -> dict:
+    """The agreement of every scoring profile with the hand-labelled COLREG cases (``mmg-casadi study labelled``).
+
+    Parameters
+    ----------
+    out : Path
+        The output directory of ``mmg-casadi study labelled``.
+
+    Returns
+    -------
+    dict
+        ``profiles``: per profile the cases and labelled verdicts it agrees with; ``command``.
+    """
+    m = json.loads((out / "metrics.json").read_text())
+    return {"profiles": m["profiles"], "command": "mmg-casadi study labelled --out DIR"}
 
 
 def collect_imazu(out: Path) -> list[dict]:
@@ -302,11 +327,37 @@ def statistics_table(data: dict) -> str:
                 cells += [_pct((r or {}).get("roles", {}).get(role)) for role in ROLES]
         lines.append("| " + " | ".join(cells) + " |")
     r0 = rows[0]
+    commands = dict.fromkeys([r0["command"], *(by[(p, methods[0])]["command"] for p in profiles[1:]
+                                                 if (p, methods[0]) in by)])
     note = (f"\nEnvironment {r0['environment']}, {r0['runs']} runs per method, seed {r0['seed']}; a risky encounter "
             f"is kept when every rule the scorer applies is kept (`{profiles[0]}` is the default profile). "
-            f"Made by: `{r0['command']}`" + "".join(f"; `{by[(p, methods[0])]['command']}`" for p in profiles[1:]
-                                                       if (p, methods[0]) in by) + ".\n")
+            "Made by: " + "; ".join(f"`{c}`" for c in commands) + ".\n")
     return "\n".join(lines) + "\n" + note
+
+
+def labelled_table(data: dict) -> str:
+    """How many hand-labelled COLREG cases and verdicts each scoring profile reproduces (the default first).
+
+    Parameters
+    ----------
+    data : dict
+        The results file (:func:`load`).
+
+    Returns
+    -------
+    str
+        A Markdown table and the note under it.
+    """
+    lab = data.get("labelled")
+    if not lab:
+        return "_No labelled cases in the results file yet._\n"
+    default = default_profile()
+    profiles = sorted(lab["profiles"], key=lambda p: (p != default, p))
+    lines = ["| profile | cases agreed | labelled verdicts agreed |", "|---|---|---|"]
+    for p in profiles:
+        t = lab["profiles"][p]
+        lines.append(f"| `{p}` | {t['cases_agreed']}/{t['cases']} | {t['verdicts_agreed']}/{t['verdicts']} |")
+    return "\n".join(lines) + f"\n\nMade by: `{lab['command']}`.\n"
 
 
 def imazu_table(data: dict) -> str:
@@ -425,6 +476,7 @@ def task_block(data: dict, task_id: str) -> str:
 
 
 BLOCKS = {"statistics": statistics_table, "imazu": imazu_table, "quick": quick_table, "claims": claims_line,
+          "labelled": labelled_table,
           **{f"task-{i}": (lambda d, i=i: task_block(d, i)) for i, _, _ in TASKS}}
 """Renderings by block name (``<!-- results:NAME -->``)."""
 _BLOCK = re.compile(r"(<!-- results:([\w-]+) -->\n)(.*?)(<!-- /results -->)", re.S)
@@ -488,6 +540,7 @@ def main(argv=None) -> int:
     c.add_argument("--statistics", type=Path, nargs="*", default=[])
     c.add_argument("--imazu", type=Path, nargs="*", default=[])
     c.add_argument("--claims", type=Path)
+    c.add_argument("--labelled", type=Path)
     c.add_argument("--tasks", action="store_true")
     sub.add_parser("render")
     a = p.parse_args(argv)
@@ -510,6 +563,8 @@ def main(argv=None) -> int:
                              not in keys] + new
         if a.claims:
             data["claims"] = collect_claims(a.claims)
+        if a.labelled:
+            data["labelled"] = collect_labelled(a.labelled)
         if a.tasks:
             data["tasks"] = collect_tasks()
         _save(data)

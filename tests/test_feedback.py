@@ -69,7 +69,7 @@ def test_simulate_prints_one_line_per_ship_and_quiet_prints_nothing(tmp_path, ca
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 2
     assert re.fullmatch(r"ship1  reached its goal at t = 51\.8 L/U; closest 5\.77 L to ship2 at t = 25\.2 L/U; "
-                        r"COLREG \(iitm-lab\): 1 of 1 risky encounters kept", out[0]), out[0]
+                        r"COLREG \(published\): 0 of 1 risky encounters kept; broken: head-on with ship2: Rule 8", out[0]), out[0]
     assert main(["simulate", "head_on", "--units", "si", "--out", str(tmp_path / "b")]) == 0
     assert "closest 1326 m to ship2 at t = 470 s" in capsys.readouterr().out
     assert main(["simulate", "head_on", "--quiet", "--out", str(tmp_path / "c")]) == 0

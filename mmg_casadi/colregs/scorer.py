@@ -24,6 +24,7 @@ Thresholds: a :class:`~mmg_casadi.colregs.profiles.ScoringProfile` (``published`
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -115,12 +116,12 @@ class Encounter:
     unfinished: bool = False
     excuse_changed: bool = False
 
-    @property
+    @functools.cached_property
     def score(self) -> float | None:
         """Mean of the applicable rules' scores (``None`` if none applies)."""
         return float(np.mean([r.score for r in self.rules.values()])) if self.rules else None
 
-    @property
+    @functools.cached_property
     def compliant(self) -> bool | None:
         """Whether every applicable rule is kept (``None`` if none applies)."""
         return all(r.verdict for r in self.rules.values()) if self.rules else None
@@ -386,7 +387,7 @@ def prepare(t, pos, psi, speed=None, active=None, *, own=None) -> Prepared:
 
 
 def score_prepared(prep: Prepared, profile=None, *, names=None, applicable_only: bool = False) -> list[Encounter]:
-    """:func:`score_encounters` of a :func:`prepare`\ d trajectory under ``profile``.
+    """:func:`score_encounters` of a trajectory from :func:`prepare` under ``profile``.
 
     Parameters
     ----------

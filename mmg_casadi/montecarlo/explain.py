@@ -1,9 +1,9 @@
 """Explain one run of a statistical study: re-run it exactly and show every encounter of its own ship, rule by rule.
 
 A study's ``study.json`` (its resolved parameters and disturbance ranges) and ``runs.csv`` (the seed of each run)
-fix a run completely: :func:`explain_run` samples the same scenario (:func:`~mmg_casadi.montecarlo.execution.
-sampled_scenario`), rolls it out through the same batch rollout as the study (:func:`~mmg_casadi.montecarlo.
-execution.run_batch`, a batch of one run) and recomputes its row. The COLREG verdicts of every profile are compared
+fix a run completely: :func:`explain_run` samples the same scenario
+(:func:`~mmg_casadi.montecarlo.execution.sampled_scenario`), rolls it out through the same batch rollout as the study
+(:func:`~mmg_casadi.montecarlo.execution.run_batch`, a batch of one run) and recomputes its row. The COLREG verdicts of every profile are compared
 with the stored row, cell by cell (:attr:`RunExplanation.reproduced`), and the own ship's encounters are scored again
 with their full detail (:class:`~mmg_casadi.colregs.scorer.Encounter`) for the figures of :func:`plot_encounter`:
 both tracks with time marks, the onset of risk, the closest point of approach, the role, each rule's verdict and
