@@ -32,8 +32,8 @@ def add_parser(sub) -> None:
                    "(default), for the least robust of each distinct one, or none")
     _add_params(f)
     _add_plugin(f)
-    f.add_argument("--out", type=_path, required=True, help="output directory (rerun it to resume after the last "
-                   "finished search)")
+    f.add_argument("--out", type=_path, required=True, help="output directory (each search is kept there every 100 "
+                   "simulations and when interrupted: rerun the same command to resume)")
 
 
 def add_search_options(p) -> None:

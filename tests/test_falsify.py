@@ -131,6 +131,69 @@ def test_the_gradient_search_finds_more_than_random_sampling_on_the_known_case()
     assert len(grad.failures) > len(rand.failures)
 
 
+def _same(a, b):
+    """Two search results equal to the bit outside the timing fields."""
+    assert [e.theta.tolist() for e in a.evaluations] == [e.theta.tolist() for e in b.evaluations]
+    assert [e.robustness for e in a.evaluations] == [e.robustness for e in b.evaluations]
+    untimed = [[{k: v for k, v in t.items() if k != "seconds"} for t in r.trace] for r in (a, b)]
+    assert json.dumps(untimed[0]) == json.dumps(untimed[1])  # NaN smooth values compare equal as text
+
+
+@pytest.mark.parametrize("search", ["gradient", "cmaes", "random"])
+def test_a_search_is_deterministic_under_its_seed(search):
+    case = CrossingCase()
+    cfg = SearchConfig(budget=30, screen=0.25, local_budget=10, seed=3)
+    first = run_search(search, "none", case, "collision", cfg)
+    _same(first, run_search(search, "none", case, "collision", cfg))
+    other = run_search(search, "none", case, "collision", SearchConfig(budget=30, screen=0.25, local_budget=10))
+    assert [e.theta.tolist() for e in other.evaluations] != [e.theta.tolist() for e in first.evaluations]
+
+
+@pytest.mark.parametrize("search, stop", [("gradient", 22), ("cmaes", 22), ("random", 35)])
+def test_an_interrupted_search_resumes_to_the_uninterrupted_result(monkeypatch, search, stop):
+    """Ctrl-C in the middle of a search (the simulation after the stop-th): what was kept (every CHECKPOINT_EVERY
+    simulations, at the end of a batch) is replayed, not simulated again, and the search ends as an uninterrupted
+    one does."""
+    import mmg_casadi.falsify.gradient as gradient_module
+    import mmg_casadi.falsify.search as search_module
+    from mmg_casadi.falsify.search import SearchResult
+
+    case = CrossingCase()
+    cfg = SearchConfig(budget=40, screen=0.25, local_budget=10)
+    whole = run_search(search, "none", case, "collision", cfg)
+    real_evaluate, real_gradient = search_module.evaluate, gradient_module.MarginGradient.__call__
+    simulated, limit = [0], [stop]
+
+    def count(n):
+        if simulated[0] + n > limit[0]:
+            raise KeyboardInterrupt
+        simulated[0] += n
+
+    def evaluate(envelope, thetas, *a, **k):
+        count(len(thetas))
+        return real_evaluate(envelope, thetas, *a, **k)
+
+    def gradient(self, theta):
+        count(1)
+        return real_gradient(self, theta)
+    monkeypatch.setattr(search_module, "evaluate", evaluate)
+    monkeypatch.setattr(gradient_module.MarginGradient, "__call__", gradient)
+    monkeypatch.setattr(search_module, "CHECKPOINT_EVERY", 4)
+    kept = []
+
+    def save(result, gradients):  # what the checkpoint file holds (through JSON, as falsify writes it)
+        kept.append(json.loads(json.dumps({"result": result.to_dict(), "gradients": gradients})))
+    with pytest.raises(KeyboardInterrupt):
+        run_search(search, "none", case, "collision", cfg, save=save)
+    done = len(kept[-1]["result"]["evaluations"])
+    assert stop - 8 <= done <= stop  # a batch of the screening or a CMA-ES generation is at most 8 here
+    simulated[0], limit[0] = 0, math.inf
+    resumed = run_search(search, "none", case, "collision", cfg,
+                         resume=SearchResult.from_dict(kept[-1]["result"], case), gradients=kept[-1]["gradients"])
+    _same(whole, resumed)
+    assert simulated[0] == cfg.budget - done  # nothing kept was simulated again
+
+
 # ------------------------------------------------------------------------------------------ outputs
 
 @pytest.fixture(scope="module")
@@ -240,6 +303,31 @@ def test_falsify_from_python_in_the_study_envelope():
     s = f.summary()
     assert s["searches"]["random"]["simulations"] == s["searches"]["cmaes"]["simulations"] == 6
     assert all(f.envelope.violation(e.theta) == 0.0 for r in f.results.values() for e in r.evaluations)
+
+
+def test_an_interrupted_falsification_resumes_from_its_checkpoint(tmp_path, monkeypatch):
+    """falsify(checkpoint=...) stopped in the middle of a search: the search's file holds what was simulated, marked
+    unfinished; the rerun simulates only the rest and ends with the uninterrupted result."""
+    import mmg_casadi.falsify.search as search_module
+
+    whole = falsify("none", 1, budget=40, searches=("random",)).results["random"]
+    real, simulated, limit = search_module.evaluate, [0], [35]
+
+    def evaluate(envelope, thetas, *a, **k):
+        if simulated[0] + len(thetas) > limit[0]:
+            raise KeyboardInterrupt
+        simulated[0] += len(thetas)
+        return real(envelope, thetas, *a, **k)
+    monkeypatch.setattr(search_module, "evaluate", evaluate)
+    with pytest.raises(KeyboardInterrupt):
+        falsify("none", 1, budget=40, searches=("random",), checkpoint=tmp_path)
+    kept = json.loads((tmp_path / "search_random.json").read_text())
+    assert kept["complete"] is False and len(kept["result"]["evaluations"]) == 32  # the first batch
+    simulated[0], limit[0] = 0, math.inf
+    resumed = falsify("none", 1, budget=40, searches=("random",), checkpoint=tmp_path).results["random"]
+    assert simulated[0] == 8
+    _same(whole, resumed)
+    assert "complete" not in json.loads((tmp_path / "search_random.json").read_text())
 
 
 @pytest.mark.slow

@@ -253,8 +253,11 @@ def falsify(method: str, environment: int = 5, *, budget: int = 2000, objective:
     report : callable, optional
         Called with a progress line every few simulations and after each search.
     checkpoint : str or Path, optional
-        A directory where each finished search is kept (``search_<name>.json``); a search kept there with the
-        same settings is read instead of run again, so an interrupted run resumes after its last finished search.
+        A directory where each search is kept (``search_<name>.json``): when finished, and every
+        :data:`~mmg_casadi.falsify.search.CHECKPOINT_EVERY` simulations and at an interruption while it runs. A
+        finished search kept there with the same settings is read instead of run again; an unfinished one is
+        replayed up to where it stopped and continued, so an interrupted run loses no simulation it kept and
+        ends with the result of an uninterrupted one.
 
     Returns
     -------
@@ -281,9 +284,17 @@ def falsify(method: str, environment: int = 5, *, budget: int = 2000, objective:
     env = Envelope(environment, disturbance=disturbance)
     f = Falsification(method, env, objective, config, params=dict(params or {}))
     for s in searches:
-        kept = _read_checkpoint(checkpoint, s, f)
-        f.results[s] = kept or run_search(s, method, env, objective, config, f.params, progress=report)
-        if checkpoint is not None and kept is None:
+        kept, complete, gradients = _read_checkpoint(checkpoint, s, f)
+        if complete:
+            f.results[s] = kept
+            continue
+        if kept is not None and report:
+            report(f"  {method} {s}: resuming after simulation {len(kept.evaluations)}")
+        save = None if checkpoint is None else (
+            lambda r, g: _write_checkpoint(checkpoint, r, f, complete=False, gradients=g))
+        f.results[s] = run_search(s, method, env, objective, config, f.params, progress=report, save=save,
+                                  resume=kept, gradients=gradients)
+        if checkpoint is not None:
             _write_checkpoint(checkpoint, f.results[s], f)
         if report:
             r = f.results[s]
@@ -300,22 +311,26 @@ def _settings(f: Falsification) -> dict:
             "params": f.params}
 
 
-def _read_checkpoint(directory, search: str, f: Falsification):
-    if directory is None:
-        return None
-    path = Path(directory) / f"search_{search}.json"
-    if not path.exists():
-        return None
+def _read_checkpoint(directory, search: str, f: Falsification) -> tuple:
+    """``(result, complete, gradients)`` of the search kept in ``directory`` with ``f``'s settings, or Nones."""
+    path = None if directory is None else Path(directory) / f"search_{search}.json"
+    if path is None or not path.exists():
+        return None, False, None
     d = json.loads(path.read_text(encoding="utf-8"))
     if d.get("settings") != json.loads(json.dumps(_settings(f))):
-        return None
-    return SearchResult.from_dict(d["result"], f.envelope)
+        return None, False, None
+    return SearchResult.from_dict(d["result"], f.envelope), d.get("complete", True), d.get("gradients")
 
 
-def _write_checkpoint(directory, result: SearchResult, f: Falsification) -> None:
+def _write_checkpoint(directory, result: SearchResult, f: Falsification, *, complete: bool = True,
+                      gradients: dict | None = None) -> None:
+    """A finished search, or (``complete=False``) one so far with the gradients its replay needs."""
     from mmg_casadi.io import write_text
 
-    text = json.dumps({"settings": _settings(f), "result": result.to_dict()})
+    d = {"settings": _settings(f), "result": result.to_dict()}
+    if not complete:
+        d.update(complete=False, gradients=gradients or {})
+    text = json.dumps(d)
     write_text(Path(directory) / f"search_{result.search}.json", text)
 
 

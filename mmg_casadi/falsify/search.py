@@ -47,6 +47,8 @@ BATCH = 32
 """Simulations rolled out together by the random sample and the screening."""
 PROGRESS_EVERY = 100
 """A progress line every this many simulations."""
+CHECKPOINT_EVERY = 100
+"""A search's progress is handed to ``save`` (:func:`run_search`) after at least this many new simulations."""
 
 
 @dataclass(frozen=True)
@@ -192,21 +194,47 @@ class SearchResult:
 
 
 class _Run:
-    """Bookkeeping of one search: the budget, the trace and the evaluations."""
+    """Bookkeeping of one search: the budget, the trace and the evaluations, its checkpoints, and the replay of an
+    interrupted search (``resume``): while the search asks for the parameter vectors the interrupted one simulated,
+    in the same order, their stored evaluations (and gradients) are taken instead of simulating again."""
 
-    def __init__(self, result: SearchResult, params: dict | None, progress=None):
-        self.r, self.params, self.progress = result, params, progress
-        self.t0 = time.perf_counter()
+    def __init__(self, result: SearchResult, params: dict | None, progress=None, save=None,
+                 resume: SearchResult | None = None, gradients: dict | None = None):
+        self.r, self.params, self.progress, self.save = result, params, progress, save
+        self.old = resume if resume is not None and resume.evaluations else None
+        self.gradients = {int(k): v for k, v in (gradients or {}).items()}
+        self.saved = len(resume.evaluations) if resume is not None else 0
+        self.t0 = time.perf_counter() - (resume.seconds if resume is not None else 0.0)
 
     @property
     def left(self) -> int:
         return self.r.config.budget - len(self.r.evaluations)
 
-    def record(self, ev: Evaluation, phase: str, start: int = -1, smooth: float = math.nan) -> Evaluation:
+    def replayed(self, theta) -> tuple | None:
+        """The interrupted search's evaluation and trace row of the next simulation if it was of ``theta``."""
+        n = len(self.r.evaluations)
+        if self.old is None or n >= len(self.old.evaluations):
+            return None
+        ev = self.old.evaluations[n]
+        if not np.array_equal(ev.theta, theta):
+            self.old = None  # the search went another way: everything from here is simulated
+            return None
+        return ev, self.old.trace[n]
+
+    def checkpoint(self, force: bool = False) -> None:
+        """Hand the search so far to ``save`` every :data:`CHECKPOINT_EVERY` new simulations (or now)."""
+        n = len(self.r.evaluations)
+        if self.save is not None and n > self.saved and (force or n - self.saved >= CHECKPOINT_EVERY):
+            self.r.seconds = time.perf_counter() - self.t0
+            self.save(self.r, self.gradients)
+            self.saved = n
+
+    def record(self, ev: Evaluation, phase: str, start: int = -1, smooth: float = math.nan,
+               row: dict | None = None) -> Evaluation:
         self.r.evaluations.append(ev)
-        self.r.trace.append({"index": len(self.r.trace), "phase": phase, "start": start,
-                             "robustness": ev.robustness, "smooth": smooth, "failure": ev.failure,
-                             "seconds": time.perf_counter() - self.t0})
+        self.r.trace.append(dict(row) if row is not None else {
+            "index": len(self.r.trace), "phase": phase, "start": start, "robustness": ev.robustness,
+            "smooth": smooth, "failure": ev.failure, "seconds": time.perf_counter() - self.t0})
         n = len(self.r.evaluations)
         if self.progress is not None and (n % PROGRESS_EVERY == 0 or n == self.r.config.budget):
             fails = sum(t["failure"] for t in self.r.trace)
@@ -217,9 +245,13 @@ class _Run:
     def simulate(self, thetas, phase: str, start: int = -1) -> list[Evaluation]:
         thetas = list(thetas)[:self.left]
         out = []
+        while thetas and (old := self.replayed(thetas[0])) is not None:
+            out.append(self.record(old[0], phase, start, row=old[1]))
+            thetas.pop(0)
         for b in range(0, len(thetas), BATCH):
             evs = evaluate(self.r.envelope, thetas[b:b + BATCH], self.r.method, self.r.objective, self.params)
             out += [self.record(ev, phase, start) for ev in evs]
+            self.checkpoint()
         return out
 
 
@@ -279,15 +311,25 @@ def _gradient(run: _Run) -> None:
     grad = MarginGradient(env, run.r.method, run.r.objective, run.params)
     span = env.high - env.low
 
-    def step(theta):
+    def step(theta, k):
+        """Evaluate and record ``theta`` with its gradient in unit coordinates (stored for a replay)."""
+        n = len(run.r.evaluations)
+        old = run.replayed(theta)
+        if old is not None and n in run.gradients:
+            ev, row = old
+            run.record(ev, "local", k, row=row)
+            return ev, row["smooth"], np.array(run.gradients[n], float)
         ev, smooth, g = grad(theta)
-        return ev, smooth, g * span  # the gradient in unit coordinates
+        g = g * span
+        run.gradients[n] = g.tolist()
+        run.record(ev, "local", k, smooth)
+        run.checkpoint()
+        return ev, smooth, g
 
     for k, theta in enumerate(_starts(run, _random(run, cfg.screened, "screen"))):
         if run.left <= 0:
             break
-        ev, smooth, g = step(theta)
-        run.record(ev, "local", k, smooth)
+        ev, smooth, g = step(theta, k)
         spent, shrink = 1, 1.0
         while not ev.failure and spent < cfg.local_budget and run.left > 0:
             norm = float(np.linalg.norm(g))
@@ -301,8 +343,7 @@ def _gradient(run: _Run) -> None:
             if not inside:
                 shrink *= 0.5
                 continue
-            ev_t, smooth_t, g_t = step(trial)
-            run.record(ev_t, "local", k, smooth_t)
+            ev_t, smooth_t, g_t = step(trial, k)
             spent += 1
             if ev_t.failure or smooth_t < smooth:
                 theta, ev, smooth, g, shrink = trial, ev_t, smooth_t, g_t, min(1.0, 2.0 * shrink)
@@ -311,7 +352,8 @@ def _gradient(run: _Run) -> None:
 
 
 def run_search(search: str, method: str, envelope: Envelope, objective: str = "collision",
-               config: SearchConfig = SearchConfig(), params: dict | None = None, progress=None) -> SearchResult:
+               config: SearchConfig = SearchConfig(), params: dict | None = None, progress=None, save=None,
+               resume: SearchResult | None = None, gradients: dict | None = None) -> SearchResult:
     """Run one search (module docstring) and return what it found.
 
     Parameters
@@ -330,6 +372,16 @@ def run_search(search: str, method: str, envelope: Envelope, objective: str = "c
         Parameter overrides of every run.
     progress : callable, optional
         Called with a line every :data:`PROGRESS_EVERY` simulations.
+    save : callable, optional
+        Called as ``save(result, gradients)`` with the search so far every :data:`CHECKPOINT_EVERY` simulations
+        and when interrupted (``KeyboardInterrupt``); ``gradients`` maps a simulation's index to its gradient in the
+        unit cube (the gradient search's local steps), what a replay needs besides the evaluations.
+    resume : SearchResult, optional
+        The search so far that ``save`` was given (an interrupted run): its simulations are replayed, not
+        simulated again, as long as the search asks for the same parameter vectors in the same order (it does:
+        every search is deterministic given its seed), so the result equals an uninterrupted run's.
+    gradients : dict, optional
+        The ``gradients`` given to ``save`` with ``resume``.
 
     Returns
     -------
@@ -344,15 +396,19 @@ def run_search(search: str, method: str, envelope: Envelope, objective: str = "c
         raise InputError("search", "cmaes or random for the colregs objective (the COLREG scorer has no "
                          "derivative)", search)
     result = SearchResult(search, method, envelope, objective, config)
-    run = _Run(result, params, progress)
-    if search == "random":
-        _random(run, config.budget, "sample")
-    elif search == "cmaes":
-        _cmaes(run)
-    else:
-        _gradient(run)
-    if run.left > 0 and search != "random":  # every start used: the rest of the budget samples on
-        more = [envelope.sample(k, config.seed) for k in range(config.screened, config.screened + run.left)]
-        run.simulate(more, "screen")
+    run = _Run(result, params, progress, save, resume, gradients)
+    try:
+        if search == "random":
+            _random(run, config.budget, "sample")
+        elif search == "cmaes":
+            _cmaes(run)
+        else:
+            _gradient(run)
+        if run.left > 0 and search != "random":  # every start used: the rest of the budget samples on
+            more = [envelope.sample(k, config.seed) for k in range(config.screened, config.screened + run.left)]
+            run.simulate(more, "screen")
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM (the command line's): keep what was simulated
+        run.checkpoint(force=True)
+        raise
     result.seconds = time.perf_counter() - run.t0
     return result
