@@ -6,6 +6,7 @@ least robustness, seconds; the ratio of the best search's distinct failures to r
 ``simulate``; the hardest-20 suites (``suite.md`` of ``study hardest``).
 """
 
+import csv
 import json
 import sys
 from pathlib import Path
@@ -29,7 +30,7 @@ def main(out: Path) -> str:
     lines = ["| method | search | simulations | failures | failure rate (95 % CI) | distinct | least robustness (L) "
              "| seconds |", "|---|---|---:|---:|---|---:|---:|---:|"]
     ratios = ["| method | best search | its distinct | random's distinct | ratio (95 % CI) | pooled distinct "
-              "| failures reproduced by simulate |", "|---|---|---:|---:|---|---:|---|"]
+              "| found by one search only | failures reproduced by simulate |", "|---|---|---:|---:|---|---:|---|---|"]
     suites = []
     for m in METHODS:
         path = out / m / "summary.json"
@@ -45,7 +46,11 @@ def main(out: Path) -> str:
         a, b = s["searches"][best]["distinct"], s["searches"]["random"]["distinct"]
         lo, hi = ratio_interval(a, b)
         ratio = f"{a / b:.2f}" if b else "∞"
-        ratios.append(f"| {m} | {best} | {a} | {b} | {ratio} ({lo:.2f}–{hi:.2f}) | {s['pooled_distinct']} | "
+        with open(out / m / "distinct.csv", newline="") as fh:
+            groups = list(csv.DictReader(fh))
+        only = ", ".join(f"{n} {sum(int(g[f'found_by_{n}']) > 0 and all(int(g[f'found_by_{o}']) == 0 for o in s['searches'] if o != n) for g in groups)}"
+                         for n in s["searches"])
+        ratios.append(f"| {m} | {best} | {a} | {b} | {ratio} ({lo:.2f}–{hi:.2f}) | {s['pooled_distinct']} | {only} | "
                       f"{s['reproduced']} of {s['failures_written']} |")
         suite = out / f"hardest_{m}" / "suite.md"
         if suite.exists():
