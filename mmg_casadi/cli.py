@@ -25,7 +25,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from mmg_casadi import compiled
+from mmg_casadi import cli_falsify, compiled
+from mmg_casadi.cli_args import _error_line
 from mmg_casadi.cli_parser import (QUICK_STUDIES, STUDIES, STUDY_HELP, _PLUGIN_COMMANDS, _CliError,  # noqa: F401
                                    _path, _plugin_specs, _setting, build_parser)
 from mmg_casadi.errors import InputError, RunError
@@ -53,13 +54,6 @@ _FLAGS = {"base_seed": "--seed", "out_dir": "--out", "n_candidates": "--candidat
 """Library argument names whose flag is not ``--`` + the name with dashes."""
 
 
-_LINE_BREAKS = {c: c.encode("unicode_escape").decode("ascii")
-                for c in "\n\r\v\f\x1c\x1d\x1e\x85\u2028\u2029"}
-
-
-def _error_line(e) -> str:
-    """``mmg-casadi: error: …`` as one line: a line break inside a given value (e.g. a file name) is escaped."""
-    return "mmg-casadi: error: " + str(e).translate(str.maketrans(_LINE_BREAKS))
 
 
 def _params_of(a) -> dict | None:
@@ -184,6 +178,8 @@ def _studies(a, names, params) -> dict:
             kw.update(runs=a.runs, base_seed=a.seed, workers=a.workers)
         if n == "profiles":
             kw.update(runs=a.runs, envs=a.envs, base_seed=a.seed, workers=a.workers)
+        if n == "hardest":
+            kw.update(k=a.k, source=a.source, **cli_falsify.search_arguments(a))
         if n == "sweep":
             kw.update(param=a.param, values=a.values, baseline=a.baseline, runs=a.runs, envs=a.envs,
                       base_seed=a.seed, workers=a.workers)
@@ -363,7 +359,7 @@ def _resumable(a) -> bool:
     """Whether the parsed command resumes from the files it has written when it is run again."""
     return (a is not None and (a.command, getattr(a, "study", None) or getattr(a, "what", None)) in
             {("study", "statistics"), ("study", "sweep"), ("study", "paper"), ("tune", "apf"),
-             ("tune", "colregs"), ("tune", "search")})
+             ("tune", "colregs"), ("tune", "search"), ("falsify", None), ("study", "hardest")})
 
 
 def _flag(field: str, a) -> str:
@@ -437,7 +433,7 @@ def _main(argv, seen: dict) -> int:
         compiled.NOTICES["stream"] = None if a.quiet else "stderr"
         handlers = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
                     "convert": _convert, "traffic": _traffic, "generate": _generate, "replay": _replay,
-                    "params": _params, "explain": _explain,
+                    "params": _params, "explain": _explain, "falsify": lambda a: cli_falsify.run(a, _params_of(a)),
                     "scenarios": _scenarios, "vessels": _vessels, "identify": _identify}
         with _silenced(a.quiet):
             handlers[a.command](a)

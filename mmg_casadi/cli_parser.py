@@ -6,18 +6,18 @@ which runs the commands.
 from __future__ import annotations
 
 import argparse
-import tomllib
-from pathlib import Path
 
-from mmg_casadi import __version__
-from mmg_casadi.errors import InputError
+from mmg_casadi import __version__, cli_falsify
+from mmg_casadi.cli_args import (  # noqa: F401  (_CliError, _methods, _setting: re-exported)
+    _CliError, _Parser, _add_determinism, _add_methods, _add_params, _add_plugin, _add_quiet, _float, _int, _methods,
+    _path, _setting)
 from mmg_casadi.guidance import methods as registry
-from mmg_casadi.params import PARAMETERS, check_value
+from mmg_casadi.params import PARAMETERS
 from mmg_casadi.scenarios.ais_replay import REPLAY_METHOD
 
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
 STUDIES = QUICK_STUDIES + ("land", "imazu", "encounters", "disturbance", "statistics", "sweep", "labelled",
-                           "profiles", "paper", "all")
+                           "profiles", "hardest", "paper", "all")
 STUDY_HELP = {
     "waypoint-square": "ILOS + PD heading control around the paper's waypoint square (CE, MCTE)",
     "static-obstacle": "the paper's static obstacle: goal at 50 L and 60 L, an obstacle off the starboard bow",
@@ -32,95 +32,14 @@ STUDY_HELP = {
     "sweep": "one parameter swept over values, paired against a baseline (resumable)",
     "labelled": "the hand-labelled COLREG cases under every scoring profile",
     "profiles": "one method's COLREG compliance under each step from the laboratory profile to the published one",
+    "hardest": "the K hardest situations a falsification found for one method, every method run on them, paired",
     "paper": "every study of the paper and a claim-by-claim report",
     "all": "the five quick studies (what `make run` runs)",
 }
 """One line per study for ``mmg-casadi study --help``."""
 
-class _CliError(InputError):
-    """An argparse error of the parser named ``field`` (``mmg-casadi simulate``)."""
 
-    def __str__(self):
-        return f"{self.allowed} (see '{self.field} --help')"
-
-
-class _Parser(argparse.ArgumentParser):
-    """ArgumentParser whose errors are one line and exit status 2."""
-
-    def error(self, message):
-        raise _CliError(self.prog, message)
-
-
-def _float(s):
-    try:
-        return float(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {s!r}") from None
-
-
-def _int(s):
-    try:
-        return int(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {s!r}") from None
-
-
-def _path(s):
-    if "\0" in s:  # the operating system takes no NUL in a path; Python raises ValueError on opening one
-        raise argparse.ArgumentTypeError(f"expected a path without NUL characters, got {s!r}")
-    return Path(s)
-
-
-def _methods(s):
-    try:
-        return registry.parse_list(s, "--methods")
-    except InputError as e:  # argparse reports a type error as "argument --methods: <message>"
-        raise argparse.ArgumentTypeError(f"expected {e.allowed}, got {e.got!r}") from None
-
-
-def _setting(s: str) -> tuple[str, object]:
-    """``NAME=VALUE`` of ``--set``: VALUE read as a TOML value (bare words are strings)."""
-    name, sep, text = s.partition("=")
-    name = name.strip()
-    if not sep or not name:
-        raise InputError("--set", "NAME=VALUE with NAME a parameter (see `mmg-casadi params`)", s)
-    try:
-        value = tomllib.loads(f"v = {text.strip()}")["v"]
-    except (tomllib.TOMLDecodeError, RecursionError):  # not a TOML value (or nested too deep): a bare word
-        value = text.strip()
-    return name, check_value(name, value, field=f"--set {name}", cls=InputError)
-
-
-def _add_params(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--params", type=_path, help="TOML file of parameters (e.g. params.toml from `tune apf`); "
-                   "see `mmg-casadi params`")
-    p.add_argument("--set", dest="settings", action="append", default=[], metavar="NAME=VALUE",
-                   help="one parameter (repeatable; wins over --params), e.g. --set r_safe=10")
-
-
-def _add_quiet(p: argparse.ArgumentParser, default) -> None:
-    p.add_argument("-q", "--quiet", action="store_true", default=default, help="say nothing on stderr but errors "
-                   "(no compile notices, progress or summary)")
-
-
-def _add_determinism(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--check-determinism", action="store_true", help="run a second time into a temporary folder "
-                   "and compare the outputs (.csv, .json, .toml, .npz) outside the timing columns: print the "
-                   "first difference and exit 1, or say they are identical")
-
-
-def _add_methods(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.METHODS)} "
-                   "(default: those the study compares)")
-
-
-def _add_plugin(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--plugin", action="append", default=[], metavar="MODULE_OR_FILE",
-                   help="a Python file or module that registers methods (repeatable; see the how-to 'Write your "
-                   "own method')")
-
-
-_PLUGIN_COMMANDS = ("simulate", "study", "tune", "convert", "traffic", "replay", "generate", "params")
+_PLUGIN_COMMANDS = ("simulate", "study", "falsify", "tune", "convert", "traffic", "replay", "generate", "params")
 """Commands that take ``--plugin`` (those that run or name methods, and the parameter list)."""
 
 
@@ -172,7 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
     """
     p = _Parser(prog="mmg-casadi", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", parser_class=_Parser,
-                           metavar="{maneuver,vessels,identify,simulate,scenarios,study,tune,convert,traffic,"
+                           metavar="{maneuver,vessels,identify,simulate,scenarios,study,falsify,tune,convert,traffic,"
                                    "generate,replay,params}")
     sub.required = True
     p.add_argument("--version", action="version", version=f"mmg-casadi {__version__}")
@@ -285,6 +204,12 @@ def build_parser() -> argparse.ArgumentParser:
             sp.add_argument("--envs", default="5", help="the environment, e.g. 5")
             sp.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
             sp.add_argument("--workers", type=_int, default=None, help="local worker processes")
+        if name == "hardest":
+            sp.add_argument("--k", type=_int, default=20, help="size of the suite (default 20)")
+            sp.add_argument("--from", dest="source", type=_path, default=None, metavar="FALSIFY_DIR",
+                            help="take the situations from this output of `mmg-casadi falsify` (default: run it "
+                            "for the first of --methods)")
+            cli_falsify.add_search_options(sp)
         if name == "sweep":
             sp.add_argument("--param", required=True, help="the swept parameter (see `mmg-casadi params`)")
             sp.add_argument("--values", required=True, help="comma-separated values, e.g. 10,15,20,25")
@@ -294,6 +219,8 @@ def build_parser() -> argparse.ArgumentParser:
             sp.add_argument("--envs", default="5", help="environments, e.g. 5 or 3-5")
             sp.add_argument("--seed", type=_int, default=0, help="base seed of the scenario sampler")
             sp.add_argument("--workers", type=_int, default=None, help="local worker processes")
+
+    cli_falsify.add_parser(sub)
 
     t = sub.add_parser("tune", help="controller and field tuning")
     tunes = t.add_subparsers(dest="what", parser_class=_Parser, metavar="{pd,apf,colregs,search}")

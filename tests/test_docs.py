@@ -308,7 +308,7 @@ def check_site(html: Path) -> None:
     for page, command in (("colregs_vortex", "--methods colregs-vortex"), ("colregs_scoring", "colregs_profile"),
                           ("imazu", "mmg-casadi study imazu"), ("wind_current", "mmg-casadi study disturbance"),
                           ("sweep", "mmg-casadi study sweep"), ("study_paper", "mmg-casadi study paper"),
-                          ("pd_gains", "--tracking-tolerance 0.03")):
+                          ("pd_gains", "--tracking-tolerance 0.03"), ("falsify", "mmg-casadi falsify")):
         source = (html / "howto" / f"{page}.html").read_text(encoding="utf-8")
         text = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", "", source))
         assert command in text, f"{page}: no `{command}`"

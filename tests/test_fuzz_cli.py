@@ -78,6 +78,8 @@ def no_work(monkeypatch):
     monkeypatch.setattr(labelled, "simulate_case", _work)  # study labelled
     monkeypatch.setattr(profiles, "prepare_layouts", _work)  # study profiles (after its arguments are checked)
     monkeypatch.setattr(explain, "run_batch", _work)  # explain (after the study's record is read)
+    import mmg_casadi.falsify.falsifier as falsifier
+    monkeypatch.setattr(falsifier, "run_search", _work)  # falsify, study hardest (after their options are checked)
 
 
 @pytest.fixture(scope="module")
