@@ -41,7 +41,7 @@ Examples
 >>> from mmg_casadi.guidance.methods import METHODS
 >>> m = METHODS["sb-mpc"]
 >>> m.memory[:4], m.commands_speed, m.sensing
-(('sb_course', 'sb_state', 'sb_clock', 'sb_slot0_x'), True, 'sb_mpc_range')
+(('sb_course', 'sb_state', 'sb_clock', 'sb_base'), True, 'sb_mpc_range')
 """
 
 from __future__ import annotations
@@ -69,9 +69,10 @@ SLOT_MEMORY = tuple(f"sb_slot{k}_{c}" for k in range(SLOTS) for c in ("x", "y", 
 """Encounter slots: the position of the slot's ship at the last step and the code of the own ship's role at the
 onset (as colregs-vortex's, :mod:`mmg_casadi.guidance.colregs_encounters`)."""
 
-MEMORY = ("sb_course", "sb_state", "sb_clock") + SLOT_MEMORY
+MEMORY = ("sb_course", "sb_state", "sb_clock", "sb_base") + SLOT_MEMORY
 """Memory rows: the course held (rad), the code ``CODE + level`` of the propulsion level held while the method is
-engaged, the time since the last decision (L/U) and the encounter slots (:data:`SLOT_MEMORY`)."""
+engaged, the time since the last decision (L/U), the heading at the onset of the give-way duties (rad; the
+readily apparent alteration is measured from it) and the encounter slots (:data:`SLOT_MEMORY`)."""
 
 CODE = 1000.0
 """Offset of the behaviour code (any value below CODE/2, such as the heading the closed loop writes when the method
@@ -95,8 +96,8 @@ PARAMS: tuple[Param, ...] = (
        "twice the distance the own ship sails at her design speed over t_duty (2 U t_duty), the farthest a ship "
        "on a reciprocal course can be and still have a duty", low_open=True),
     _p("t_duty", 25.0, 0.0, None, "L/U", "a ship closing with a straight-line passing inside d_close and a TCPA "
-       "below this gives the own ship a duty (to keep her course and speed, or to give way readily apparent and "
-       "to starboard)", "ours: 7.7 min for the KCS, within the 6 to 12 min at which mariners commonly set the "
+       "below this opens an encounter (its role judged then and kept); with the passing inside d_safe it gives a "
+       "stand-on duty (a give-way duty: with a TCPA inside the horizon)", "ours: 7.7 min for the KCS, within the 6 to 12 min at which mariners commonly set the "
        "ARPA's TCPA alarm", low_open=True),
     _p("horizon", 15.0, 0.0, None, "L/U", "prediction horizon T", "ours: 15 L/U = 4.7 min for the KCS, about the "
        "300 s of NTNU's colav-simulator; long enough that a ship closing at twice the design speed is seen 30 L "
@@ -111,7 +112,7 @@ PARAMS: tuple[Param, ...] = (
        "the behaviour chosen is held in between",
        "ours: 1 L/U = 18.6 s for the KCS, under the 2.5 L/U she takes to complete a 30° alteration (the "
        "paper re-evaluates every few seconds for a 5 m vessel)", low_open=True),
-    _p("d_safe", 8.5, 0.0, None, "L", "safety distance d_safe of the collision risk (Johansen eq. 6)",
+    _p("d_safe", 11.0, 0.0, None, "L", "safety distance d_safe of the collision risk (Johansen eq. 6)",
        "ours: close quarters begin at about 1 nm between ships in sight (Cockcroft & Lameijer p. 52), 8.05 L "
        "for the 230 m KCS, which Rule 8(c) asks a give-way ship to avoid; plus half a length for the reduced "
        "model's position error (0.4 L rms). The published evaluator's safe passing distance is also 1 nm; this "
@@ -127,10 +128,10 @@ PARAMS: tuple[Param, ...] = (
        "the straight-line passing below which a stand-on duty holds", "ours: 2 nm (16.1 L for the KCS), by "
        "which a give-way ship in a crossing should have acted (Cockcroft & Lameijer p. 108); the paper and "
        "colav-simulator use 5 × d_safe", low_open=True),
-    _p("k_coll", 0.5, 0.0, None, "(U)^-2", "collision cost K_coll: C = K_coll |v_0 − v_i|² (Johansen eq. 7)",
+    _p("k_coll", 5.0, 0.0, None, "(U)^-2", "collision cost K_coll: C = K_coll |v_0 − v_i|² (Johansen eq. 7)",
        _JOHANSEN + ": 0.5 (the relative speed there in m/s of a 5 m vessel; here in U, the risk's scale set "
        "by d_safe in L and t in L/U: ours)"),
-    _p("dv_min", 0.5, 0.0, None, "U", "relative speed floor Δv_min of the collision cost: C = K_coll max(|v_0 − v_i|², "
+    _p("dv_min", 0.8, 0.0, None, "U", "relative speed floor Δv_min of the collision cost: C = K_coll max(|v_0 − v_i|², "
        "Δv_min²)", "ours: Johansen's C vanishes for two ships on parallel courses at equal speed, which then close "
        "at no cost; the floor prices such a collision as one at half the design speed"),
     _p("k_mean", 1.0, 0.0, None, "", "weight of the time average of a neighbour's collision cost, added to its "
@@ -138,7 +139,7 @@ PARAMS: tuple[Param, ...] = (
        "makes every behaviour's hazard that of the first sample, before any behaviour has turned the ship, and "
        "the choice falls to the deviation costs; the average ranks the behaviours by the risk they carry "
        "later"),
-    _p("p", 1.0, 0.5, None, "", "time exponent p of the collision risk's discount 1/t^p (Johansen eq. 6)",
+    _p("p", 0.5, 0.5, None, "", "time exponent p of the collision risk's discount 1/t^p (Johansen eq. 6)",
        _JOHANSEN),
     _p("kappa", 3.0, 0.0, None, "", "COLREG violation cost κ (Johansen eq. 9)", _JOHANSEN),
     _p("kappa_tc", 10.0, 0.0, None, "", "transitional cost κ_TC (Hagen et al. 2018)", "Hagen et al. 2018 as in "
@@ -180,8 +181,12 @@ PARAMS: tuple[Param, ...] = (
        "(the own ship crossed ahead of her, Rule 15, or did not pass her port to port, Rule 14)",
        "ours, after the psbmpc's GW violation (colregs_violation_evaluator.hpp, evaluate_GW_violation), with its "
        "weight as κ_TC"),
-    _p("kappa_ra", 5.0, 0.0, None, "", "readily apparent cost κ_RA of a course offset below dpsi_apparent while "
-       "the own ship gives way (Rule 8(b))", "ours, after the psbmpc's kappa_RA: above the 15° offset's deviation "
+    _p("kappa_port", 5.0, 0.0, None, "", "cost κ_port of an alteration to port while the own ship meets a ship "
+       "head-on (Rule 14(a)), gives way to one crossing from starboard (Rule 15: it would cross ahead of her) or, "
+       "free to act, stands on for one crossing from port (Rule 17(c))", "ours, after the psbmpc's GW violation "
+       "(a port alteration of a give-way ship, colregs_violation_evaluator.hpp), with κ_RA's weight"),
+    _p("kappa_ra", 5.0, 0.0, None, "", "readily apparent cost κ_RA of a course less than dpsi_apparent from the "
+       "heading at the onset of a give-way duty while the duty lasts (Rule 8(b))", "ours, after the psbmpc's kappa_RA: above the 15° offset's deviation "
        "cost advantage over 30°"),
     _p("dpsi_apparent_deg", 30.0, 0.0, 90.0, "deg", "the smallest course offset that is readily apparent",
        "ours: two of the paper's 15° offset steps; a single 15° step is easily missed on radar (Cockcroft & "
@@ -189,8 +194,10 @@ PARAMS: tuple[Param, ...] = (
     _p("g1", 100.0, 0.0, None, "", "grounding cost G_1 (Tengesdal et al. 2022)", _PSBMPC + " (G_1 = 100)"),
     _p("g3", 2.5, 0.0, None, "1/L", "grounding cost's decay G_3 with the distance beyond d_land",
        _PSBMPC + ": G_3 = 0.25 per metre for its ~10 m own ship, kept per ship length (ours)"),
-    _p("g4", 0.2, 0.0, None, "1/(L/U)", "grounding cost's decay G_4 with the prediction time",
-       _PSBMPC + ": G_4 = 0.01 per second, 0.19 per L/U of the KCS (ours: 0.2)"),
+    _p("g4", 0.07, 0.0, None, "1/(L/U)", "grounding cost's decay G_4 with the prediction time",
+       _PSBMPC + ": G_4 = 0.01 per second over its 110 s horizon, a decay of exp(-1.1) at the horizon, kept over "
+       "ours (ours: 1.1 / 15 L/U; the KCS's 18.6 s time unit would make it 0.19 per L/U and land at the horizon "
+       "cost less than a turn)"),
     _p("d_land", 1.5, 0.0, None, "L", "distance from land inside which the grounding cost is full",
        "ours: 1.5 L, the band 1.5 L inside environment 6's channel in which routes run; the psbmpc uses its "
        "d_safe (50 m for a ~10 m vessel)"),
@@ -225,6 +232,21 @@ def _hull(vessel: str, unit: str) -> tuple:
             lam, mu)
 
 
+RISKY = 5
+"""Added to the role code of an encounter once its straight-line passing was inside d_safe (colregs_encounters'
+ACTING, reused: the codes stay within what its slots recall)."""
+
+
+def _role(code):
+    """The role of an encounter's code (without :data:`RISKY`; 0 for none)."""
+    return code - RISKY * (code > RISKY + 0.5)
+
+
+def _gives(role):
+    """1 for a role in which the own ship gives way: give-way, head-on, overtaking."""
+    return (ca.fabs(role - GIVE_WAY) < 0.5) + (ca.fabs(role - HEAD_ON) < 0.5) + (ca.fabs(role - OVERTAKING) < 0.5)
+
+
 def neighbour_columns(pos, vel, psi, nb_pos, nb_vel, active, P, slots=None) -> dict:
     """What the hazard needs of each neighbour at the decision (:data:`~mmg_casadi.guidance.sb_mpc_cost.NB_ROWS`),
     and the duties of the stand-on and readily apparent terms.
@@ -248,9 +270,10 @@ def neighbour_columns(pos, vel, psi, nb_pos, nb_vel, active, P, slots=None) -> d
     -------
     dict
         ``nb`` (len(NB_ROWS) × M), ``hold`` (1×M: a stand-on duty), ``giveway`` (1×M: a give-way, head-on or
-        overtaking duty), ``role`` (0 where no encounter is open), ``tcpa`` and ``cpa`` (straight-line, at the
-        present velocities), ``memory`` (the slot rows after the step, by name; empty without ``slots``) and
-        ``opened`` (1 when an encounter opened at this step).
+        overtaking duty), ``port`` (1×M: a duty that forbids a port alteration), ``role`` (0 where no encounter is open), ``tcpa`` and ``cpa`` (straight-line, at the
+        present velocities), ``memory`` (the slot rows after the step, by name; empty without ``slots``),
+        ``opened`` (1 when an encounter opened at this step) and ``gave_way`` (1 when a give-way duty was open
+        before this step).
     """
     m = nb_pos.size2()
     los = nb_pos - ca.repmat(pos, 1, m)
@@ -275,24 +298,35 @@ def neighbour_columns(pos, vel, psi, nb_pos, nb_vel, active, P, slots=None) -> d
                      ca.cos(chi_nb) * -los[0, :] - ca.sin(chi_nb) * los[1, :])
     role_now = classify_role(beta, alpha, psi, chi_nb, u0, ni, theta_head_on=P["sb_mpc_phi_ho"], stern=STERN)
     # encounters: a ship closing within t_duty with a straight-line passing inside d_close opens one, with the role
-    # of the onset, kept (in a slot of the memory) while she closes; it gives the own ship a duty
+    # of the onset, kept (in a slot of the memory) while she closes; its code is the role, plus RISKY once the
+    # passing is inside d_safe (a risk of collision as the planner sees it) within t_duty for a stand-on ship,
+    # within the horizon for a give-way one: from then on it gives the own ship a duty
     closing = active * ship * (tcpa > 0)
-    risk = closing * (tcpa < P["sb_mpc_t_duty"]) * (cpa < P["sb_mpc_d_close"])
+    opens = closing * (tcpa < P["sb_mpc_t_duty"]) * (cpa < P["sb_mpc_d_close"])
     memory = {}
     if slots is None:
-        role, opened = risk * role_now, ca.SX(0)
+        code, opened, gave_way = opens * role_now, ca.SX(0), ca.SX(0)
     else:
         link, code = recall(nb_pos, closing, slots)
-        opened = ca.sum2(risk * (1 - sum(link))) > 0 if m else ca.SX(0)  # an encounter opens at this step
-        link, role = open_encounters(nb_pos, risk, role_now, link, code)
-        memory = {k.replace("cv_", "sb_"): v for k, v in remember(nb_pos, link, role, psi).items()}
-    duty = closing * (role > 0.5)
+        gave_way = ca.sum2(_gives(_role(code)) * (code > RISKY + 0.5)) > 0 if m else ca.SX(0)  # before the step
+        opened = ca.sum2(opens * (1 - sum(link))) > 0 if m else ca.SX(0)  # an encounter opens at this step
+        link, code = open_encounters(nb_pos, opens, role_now, link, code)
+    stands = (ca.fabs(_role(code) - STAND_ON) < 0.5) + (ca.fabs(_role(code) - OVERTAKEN) < 0.5)
+    within = ca.if_else(stands, P["sb_mpc_t_duty"], P["sb_mpc_horizon"])
+    risky_now = closing * (cpa < P["sb_mpc_d_safe"]) * (tcpa < within)
+    code = code + RISKY * risky_now * (code > 0.5) * (code < RISKY + 0.5)  # the risk arises: mark it
+    if slots is not None:
+        memory = {k.replace("cv_", "sb_"): v for k, v in remember(nb_pos, link, code, psi).items()}
+    role = _role(code)
+    duty = closing * (code > RISKY + 0.5)
     stand_on = (ca.fabs(role - STAND_ON) < 0.5) + (ca.fabs(role - OVERTAKEN) < 0.5)
     free = (d < P["sb_mpc_r_free"]) * (cpa < P["sb_mpc_d_safe"]) * (tcpa < P["sb_mpc_t_free"])
     hold = duty * stand_on * (1 - free)
-    gives = (ca.fabs(role - GIVE_WAY) < 0.5) + (ca.fabs(role - HEAD_ON) < 0.5) + (ca.fabs(role - OVERTAKING) < 0.5)
-    giveway = duty * gives
+    giveway = duty * _gives(role)
     gw_side = duty * ((ca.fabs(role - GIVE_WAY) < 0.5) + (ca.fabs(role - HEAD_ON) < 0.5))
+    # no alteration to port: head-on (Rule 14(a)), crossing give-way (Rule 15) and crossing stand-on once free
+    # (Rule 17(c))
+    port = gw_side + duty * (ca.fabs(role - STAND_ON) < 0.5) * free
     # a neighbour that cannot come within d_close over the horizon has no hazard to evaluate
     reach = P["sb_mpc_d_close"] + (u0 + ni) * P["sb_mpc_horizon"]
     relevant = active * (d2 < reach * reach)
@@ -314,8 +348,8 @@ def neighbour_columns(pos, vel, psi, nb_pos, nb_vel, active, P, slots=None) -> d
     d_safe = ca.if_else(ship, ca.if_else(hold, P["sb_mpc_d_standon"], P["sb_mpc_d_safe"]), P["sb_mpc_d_obstacle"])
     nb = ca.vertcat(los, nb_vel, ni, relevant, s0, si0, o0, q0, h0, x0, d_safe, gw_side)
     assert nb.size1() == len(NB_ROWS)
-    return {"nb": nb, "hold": hold, "giveway": giveway, "role": role, "tcpa": tcpa, "cpa": cpa, "memory": memory,
-            "opened": opened}
+    return {"nb": nb, "hold": hold, "giveway": giveway, "port": port, "role": role, "tcpa": tcpa, "cpa": cpa,
+            "memory": memory, "opened": opened, "gave_way": gave_way}
 
 
 def _land_near(pos, walls, reach):
@@ -344,8 +378,8 @@ def decision_inputs(g, vessel: str) -> dict:
     -------
     dict
         ``args`` (list), ``engaged``, ``level_last``, ``course_held``, ``fresh``, ``rpm`` (per level), ``walls``,
-        ``chi_wp`` (the course to the waypoint), ``slots`` (the encounter slots after the step) and ``opened`` (an
-        encounter opened at this step).
+        ``chi_wp`` (the course to the waypoint), ``slots`` (the encounter slots after the step), ``opened`` (an
+        encounter opened at this step) and ``base`` (the ``sb_base`` row after the step).
     """
     P = g.P
     model, rpm_per_u, n_design, _, mu = _hull(vessel, g.layout.unit_vessel())
@@ -370,9 +404,12 @@ def decision_inputs(g, vessel: str) -> dict:
                      P["sb_mpc_p"])
     so_any = ca.sum2(cols["hold"]) > 0 if m else ca.SX(0)
     ra_any = ca.sum2(cols["giveway"]) > 0 if m else ca.SX(0)
+    base = ca.if_else(cols["gave_way"], g.memory["sb_base"], g.psi) if "sb_base" in g.memory else g.psi
+    port_any = ca.sum2(cols["port"]) > 0 if m else ca.SX(0)
     costs = ca.vertcat(P["sb_mpc_kappa_so"], P["sb_mpc_kappa_ra"], P["sb_mpc_k_p"], P["sb_mpc_k_chi_strb"],
                        P["sb_mpc_k_chi_port"], P["sb_mpc_k_dp"], P["sb_mpc_k_dchi_strb"], P["sb_mpc_k_dchi_port"],
-                       so_any, ra_any, P["sb_mpc_dpsi_keep"], P["sb_mpc_dpsi_apparent"])
+                       so_any, ra_any, P["sb_mpc_dpsi_keep"], P["sb_mpc_dpsi_apparent"], P["sb_mpc_kappa_port"],
+                       port_any, base)
     pair = ca.vertcat(P["sb_mpc_d_safe"], P["sb_mpc_d_close"], P["sb_mpc_k_coll"], P["sb_mpc_kappa"],
                       P["sb_mpc_kappa_tc"], ca.cos(P["sb_mpc_phi_ah"]), ca.cos(P["sb_mpc_phi_ot"]),
                       ca.cos(P["sb_mpc_phi_ho"]), ca.cos(P["sb_mpc_phi_cr"]), P["sb_mpc_v_min"], P["sb_mpc_dv_min"],
@@ -382,7 +419,7 @@ def decision_inputs(g, vessel: str) -> dict:
     args = [own, cols["nb"], ca.DM(model), gains, costs, pair, ground] + ([walls] if walls is not None else [])
     return {"args": args, "engaged": engaged, "level_last": level_last, "course_held": course_held,
             "fresh": fresh, "rpm": rpm, "walls": walls, "chi_wp": chi_wp, "slots": cols["memory"],
-            "opened": cols["opened"]}
+            "opened": cols["opened"], "base": ca.if_else(ra_any, base, g.psi)}
 
 
 def sb_mpc_command(g) -> Command:
@@ -414,7 +451,7 @@ def sb_mpc_command(g) -> Command:
     rpm = ca.if_else(level < 0.5, d["rpm"][0], ca.if_else(level < 1.5, d["rpm"][1], d["rpm"][2]))
     state = ca.if_else(d["engaged"], CODE + level, 0)
     memory = {"sb_course": course, "sb_state": state,
-              "sb_clock": ca.if_else(due, P["dt"], clock + P["dt"]), **d["slots"]}
+              "sb_clock": ca.if_else(due, P["dt"], clock + P["dt"]), "sb_base": d["base"], **d["slots"]}
     return Command(ca.vertcat(ca.cos(course), ca.sin(course)), rpm, memory)
 
 

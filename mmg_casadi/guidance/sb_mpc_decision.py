@@ -49,8 +49,8 @@ class Decision:
         Per behaviour: alteration from the present heading and course offset from the course to the waypoint
         (degrees), propulsion level (fraction of the service rpm), total hazard and its neighbours' part (the sum
         over the neighbours).
-    waypoint : numpy.ndarray of bool (B,)
-        The behaviour "the course to the waypoint at full propulsion".
+    waypoint, held : numpy.ndarray of bool (B,)
+        The behaviours "the course to the waypoint at full propulsion" and "the course and level held".
     x, y : numpy.ndarray (S, B)
         Predicted own positions at the samples (L).
     times : numpy.ndarray (S,)
@@ -63,6 +63,10 @@ class Decision:
         Neighbours within the sensing range (1/0).
     d_safe : float
         The safety distance of the collision risk (L).
+    inputs : tuple of casadi.DM
+        The numeric arguments of the decision's Functions
+        (:func:`~mmg_casadi.guidance.sb_mpc_cost.hazard_function`, and
+        :func:`~mmg_casadi.guidance.sb_mpc_cost.plan_function` after ``due`` and ``held``).
     """
 
     pos: np.ndarray
@@ -74,6 +78,7 @@ class Decision:
     hazard: np.ndarray
     collision: np.ndarray
     waypoint: np.ndarray
+    held: np.ndarray
     x: np.ndarray
     y: np.ndarray
     times: np.ndarray
@@ -82,10 +87,11 @@ class Decision:
     nb_vel: np.ndarray
     active: np.ndarray
     d_safe: float
+    inputs: tuple = ()
 
     def to_pandas(self):
-        """One row per behaviour: ``turn_deg``, ``offset_deg``, ``level``, ``waypoint``, ``hazard``, ``collision``,
-        ``chosen``.
+        """One row per behaviour: ``turn_deg``, ``offset_deg``, ``level``, ``waypoint``, ``held``, ``hazard``,
+        ``collision``, ``chosen``.
 
         Returns
         -------
@@ -95,7 +101,7 @@ class Decision:
         import pandas as pd
 
         return pd.DataFrame({"turn_deg": self.turn_deg, "offset_deg": self.offset_deg, "level": self.level,
-                             "waypoint": self.waypoint,
+                             "waypoint": self.waypoint, "held": self.held,
                              "hazard": self.hazard, "collision": self.collision,
                              "chosen": np.arange(self.hazard.size) == self.chosen})
 
@@ -128,16 +134,18 @@ class Decision:
         norm = colors.LogNorm(vmin=max(finite.min(), 1e-3), vmax=max(finite.max(), 10 * finite.min()))
         cmap = plt.get_cmap("viridis")
         for b in range(self.hazard.size):
-            if b == self.chosen or not any(abs(self.level[b] - lv) < 1e-9 for lv in levels):
+            if b == self.chosen or self.held[b] or not any(abs(self.level[b] - lv) < 1e-9 for lv in levels):
                 continue
-            ax.plot(self.y[:, b], self.x[:, b], color=cmap(norm(finite[b])), lw=1.0, alpha=0.9,
-                    ls="-." if self.waypoint[b] else "-")
+            ax.plot(np.r_[self.pos[1], self.y[:, b]], np.r_[self.pos[0], self.x[:, b]], color=cmap(norm(finite[b])),
+                    lw=1.0, alpha=0.9, ls="-." if self.waypoint[b] else "-")
             ax.annotate(f"{self.turn_deg[b]:+.0f}°", (self.y[-1, b], self.x[-1, b]), fontsize=7,
                         color=cmap(norm(finite[b])))
         c = self.chosen
-        ax.plot(self.y[:, c], self.x[:, c], color="k", lw=2.5,
+        ax.plot(np.r_[self.pos[1], self.y[:, c]], np.r_[self.pos[0], self.x[:, c]], color="k", lw=2.5,
                 label=f"chosen: {self.turn_deg[c]:+.0f}° from the heading, level {self.level[c]:g}")
-        ax.plot(self.pos[1], self.pos[0], marker=(3, 0, -math.degrees(self.psi)), color="k", ms=10, ls="")
+        ax.plot(self.pos[1], self.pos[0], "ko", ms=5)
+        ax.annotate("", xy=(self.pos[1] + 2.5 * math.sin(self.psi), self.pos[0] + 2.5 * math.cos(self.psi)),
+                    xytext=(self.pos[1], self.pos[0]), arrowprops={"arrowstyle": "->", "color": "k", "lw": 1.5})
         theta = np.linspace(0.0, 2 * math.pi, 90)
         ax.plot(self.pos[1] + self.d_safe * np.sin(theta), self.pos[0] + self.d_safe * np.cos(theta), "k:", lw=0.8,
                 label=f"d_safe = {self.d_safe:g} L")
@@ -223,9 +231,11 @@ def decide(pos, vel, psi, goal, nb_pos, nb_vel, *, active=None, params: dict | N
     turn = np.degrees(np.angle(np.exp(1j * (course.ravel() - float(psi)))))
     return Decision(pos=np.array(pos).ravel(), psi=float(psi), course_wp=float(ca.evalf(d["chi_wp"])), turn_deg=turn,
                     offset_deg=np.degrees(offset.ravel()), level=np.array([LEVELS[k] for k in level_idx]),
-                    hazard=hazard, collision=collision.ravel(), waypoint=b["waypoint"] > 0.5, x=x, y=y,
+                    hazard=hazard, collision=collision.ravel(), waypoint=b["waypoint"] > 0.5,
+                    held=b["held"] > 0.5, x=x, y=y,
                     times=resolved["sb_mpc_horizon"] / samples * np.arange(1, samples + 1), chosen=chosen,
-                    nb_pos=nb_pos, nb_vel=nb_vel, active=active.ravel(), d_safe=float(values["sb_mpc_d_safe"]))
+                    nb_pos=nb_pos, nb_vel=nb_vel, active=active.ravel(), d_safe=float(values["sb_mpc_d_safe"]),
+                    inputs=tuple(args))
 
 
 def decision_at(result, t: float, *, ship: int = 0) -> Decision:
