@@ -1,10 +1,10 @@
 """Scenario-based MPC
 
-One decision of `sb-mpc` (Johansen, Perez & Cristofaro 2016) in Imazu problem 12, the targets holding course and
-speed: the own ship's predicted track under each control behaviour at full propulsion (coloured by its hazard;
-the numbers are the alteration from her heading), the behaviour chosen (black), the targets' constant-velocity
-predictions over the 15 L/U horizon (red dots one L/U apart) and the own ship's safety distance. Right: the tracks
-that followed.
+One decision of `sb-mpc` (Johansen, Perez & Cristofaro 2016) in Imazu problem 2 (a crossing, the own ship gives
+way; the target holds course and speed), at the onset of the give-way duty: the own ship's predicted track under
+each control behaviour at full propulsion (coloured by its hazard; the numbers are the alteration from her heading),
+the behaviour chosen (black: 30° to starboard), the target's constant-velocity prediction over the 15 L/U horizon
+(red dots one L/U apart) and the own ship's safety distance. Right: the tracks that followed.
 
 Full size: `mmg-casadi study imazu --methods sb-mpc --targets hold --out out/sb_mpc_imazu`
 """
@@ -20,7 +20,7 @@ from mmg_casadi.scenarios.imazu import imazu_case
 from mmg_casadi.scenarios.run import run_scenario
 from mmg_casadi.scenarios.scenario import scenario_from_dict
 
-CASE, T_DECISION = 12, 8.0  # the first give-way decisions: three targets 20-30 L off
+CASE, T_DECISION = 2, 14.75  # the decision at the onset of the give-way duty: +30° to starboard, held
 
 result = run_scenario(scenario_from_dict(imazu_case(CASE, method="sb-mpc", targets="hold", t_max=60.0)))
 decision = decision_at(result, T_DECISION)
