@@ -227,8 +227,10 @@ def test_targets_hold_and_environment_6(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_study_imazu_encounters_and_land(tmp_path, capsys):
-    for study in ("imazu", "encounters", "land"):
-        code, err = _main(capsys, "study", study, "--methods", "sb-mpc", "--out", tmp_path / study)
+    code, err = _main(capsys, "generate", "--situations", "3", "--seed", "0", "--out", tmp_path / "set")
+    assert code == 0, err
+    for study, *args in (("imazu",), ("encounters", tmp_path / "set"), ("land",)):
+        code, err = _main(capsys, "study", study, *args, "--methods", "sb-mpc", "--out", tmp_path / study)
         assert code == 0, (study, err)
     res = json.loads((tmp_path / "imazu" / "metrics.json").read_text())["results"]["hold"]["sb-mpc"]
     assert len(res["cases"]) == 22 and res["safe"] == 22
