@@ -1,9 +1,10 @@
 """Compiled time per guidance call per ship for each method with 1, 5 and 13 neighbours.
 
-For every method (inverse-square, sink-vortex, modified-vortex, velocity-obstacle) and a scenario of 2, 6 or 14
+For every method (the reactive ones and the planner sb-mpc) and a scenario of 2, 6 or 14
 ships (so each ship has 1, 5 or 13 neighbours, all inside R_safe), the natively compiled guidance Function
 (:func:`mmg_casadi.closed_loop.simulation.compiled_guidance`: reactive field / velocity obstacle, ILOS and PD for every ship)
-is mapped over many scenario states and timed; the time is divided by the number of states and ships. Printed
+is mapped over many scenario states and timed; the time is divided by the number of states and ships (for sb-mpc
+every call is a decision: its memory holds no behaviour, so the worst case of its decision interval). Printed
 in nanoseconds and as a ratio to inverse-square with 1 neighbour (the paper's "computation effort" panel). Every
 neighbour is within R_safe, so this is the worst case of the guidance the rollouts run (which evaluates a method
 on the neighbours within R_safe only); the Monte Carlo study's ``guidance_call_us`` column times the same
@@ -26,12 +27,12 @@ import numpy as np
 
 from mmg_casadi.closed_loop.layout import default_globals, Layout, pack_params
 from mmg_casadi.closed_loop.state import initial_state
-from mmg_casadi.guidance.methods import AVOIDING
+from mmg_casadi.guidance.methods import AVOIDING, PLANNERS
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
 from mmg_casadi.montecarlo.execution import time_guidance
 from mmg_casadi.closed_loop.simulation import compiled_guidance
 
-METHODS = AVOIDING
+METHODS = AVOIDING + PLANNERS
 
 
 def states(layout: Layout, columns: int, seed: int = 0):

@@ -18,7 +18,7 @@ from mmg_casadi.closed_loop.layout import default_globals, Layout, pack_params
 from mmg_casadi.closed_loop.state import initial_state
 from mmg_casadi.closed_loop.step import build_closed_loop_step, build_guidance
 from mmg_casadi.errors import ParameterError
-from mmg_casadi.guidance.methods import AVOIDING
+from mmg_casadi.guidance.methods import AVOIDING, PLANNERS
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
 
 
@@ -52,7 +52,7 @@ def _states(layout: Layout, count: int, seed: int):
     return np.column_stack(X), np.column_stack(P)
 
 
-LAYOUTS = [Layout((m,) * 6, n_obstacles=2) for m in AVOIDING] + [
+LAYOUTS = [Layout((m,) * 6, n_obstacles=2) for m in AVOIDING + PLANNERS] + [
     Layout(("modified-vortex", "velocity-obstacle", "none", "colregs-vortex"), n_obstacles=1),
     Layout(("modified-vortex",) * 3, n_walls=2),
     Layout(("velocity-obstacle", "colregs-vortex", "velocity-obstacle-speed", "none"), n_obstacles=1, n_walls=2,
@@ -60,6 +60,7 @@ LAYOUTS = [Layout((m,) * 6, n_obstacles=2) for m in AVOIDING] + [
     Layout(("velocity-obstacle",) * 4, n_obstacles=1, vo_cone="wide", vo_hold=False),
     Layout(("colregs-vortex", "modified-vortex", "velocity-obstacle", "none"), n_obstacles=1,
            vessels=("kcs", "kvlcc2", "kcs", "kvlcc2")),  # mixed hulls: a KVLCC2 in the KCS's units
+    Layout(("sb-mpc", "none", "colregs-vortex", "sb-mpc"), n_obstacles=1, n_walls=2, n_land=2),  # its grounding cost
 ]
 
 

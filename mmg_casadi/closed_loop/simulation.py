@@ -22,6 +22,7 @@ from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.errors import InputError
 from mmg_casadi.closed_loop.state import ship_rows
 from mmg_casadi.closed_loop.step import AUX, build_closed_loop_step, build_guidance
+from mmg_casadi.guidance import methods
 from mmg_casadi.guidance.methods import forget_on_unregister
 
 
@@ -410,7 +411,7 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200,
     fleet = layout.neighbours > 0
     if fleet:
         chunk = FLEET_CHUNK
-        radius = candidate_radius(float(p[layout.param_index("r_safe")]), float(p[layout.param_index("dt")]), chunk)
+        radius = candidate_radius(_look_radius(layout, p), float(p[layout.param_index("dt")]), chunk)
     F = _chunk(layout, chunk, 1)
     t_max = float(p[layout.param_index("t_max")])
     xs, auxs = [np.asarray(x0, float)[:, None]], []
@@ -440,6 +441,20 @@ def simulate(layout: Layout, x0: np.ndarray, p: np.ndarray, *, chunk: int = 200,
     X, A = X[:, :stop + 1], A[:stop]
     states = ship_rows(layout, X)
     return Trajectory(layout, X[0].copy(), states, A, overflow)
+
+
+def _look_radius(layout: Layout, p) -> float:
+    """The farthest a ship's method sees its neighbours (L): R_safe, or R_safe plus a lookout, or a method's own
+    sensing range (:class:`~mmg_casadi.guidance.contract.Method`), the largest over the layout's methods."""
+    r_safe = float(p[layout.param_index("r_safe")])
+    ranges = [r_safe]
+    named = None
+    for name in dict.fromkeys(layout.methods):
+        spec = methods.get(name)
+        if spec.lookout or spec.sensing:
+            named = named or layout.split_params(ca.DM(np.asarray(p, float)))
+            ranges.append(r_safe + float(named[spec.lookout]) if spec.lookout else float(named[spec.sensing]))
+    return max(ranges)
 
 
 def command_rows(layout: Layout) -> list[list[int]]:

@@ -266,6 +266,8 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     look = active  # the neighbours the method gets as active: within R_safe, plus its lookout if it has one
     if spec.lookout and M:
         look = nb_present * _indicator(P["r_safe"] + P[spec.lookout] - d_nb, sm)
+    if spec.sensing and M:  # or within its own sensing range
+        look = nb_present * _indicator(P[spec.sensing] - d_nb, sm)
     n_service = Pi["leg_rpm"][0]  # the propeller speed of the leg being sailed (exact when every leg has one)
     for k in range(1, layout.max_path):
         n_service = ca.if_else(Xi[S_["idx"]] > k - 0.5, Pi["leg_rpm"][k], n_service)

@@ -188,6 +188,10 @@ class Method:
     lookout : str or None
         One of ``inputs``: the builder also gets the neighbours within R_safe plus this range (L) as active, and
         ignores those beyond R_safe it has no use for; None: R_safe.
+    sensing : str or None
+        One of the method's inputs: the builder gets the neighbours within this range (L) as active, whatever
+        R_safe (a planner's own sensing range; with ``engaged`` it also stays in charge beyond R_safe); None: R_safe
+        (or ``lookout``). At most one of ``lookout`` and ``sensing``.
     engaged : callable or None
         ``memory -> SX``, from the method's memory rows after the step (by name): 1 while the method steers although
         no neighbour is within R_safe (an encounter with a ship within its lookout), so the closed loop neither
@@ -226,6 +230,7 @@ class Method:
     lookout: str | None = None
     engaged: Callable | None = None
     params: tuple = ()
+    sensing: str | None = None
     prefix: str | None = None
     land_test: bool | None = None
     rule9: bool = False

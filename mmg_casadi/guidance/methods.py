@@ -12,7 +12,7 @@ parameters, groups and memory) is written where it is defined, in :mod:`mmg_casa
 Examples
 --------
 >>> NAMES
-('inverse-square', 'sink-vortex', 'modified-vortex', 'velocity-obstacle', 'velocity-obstacle-speed', 'none', 'colregs-vortex')
+('inverse-square', 'sink-vortex', 'modified-vortex', 'velocity-obstacle', 'velocity-obstacle-speed', 'none', 'colregs-vortex', 'sb-mpc')
 >>> METHODS["modified-vortex"].groups
 ('sink-vortex', 'modified-vortex')
 """
@@ -34,6 +34,7 @@ from mmg_casadi.guidance import colregs_vortex
 
 from mmg_casadi.guidance import fields
 
+from mmg_casadi.guidance import sb_mpc
 from mmg_casadi.guidance import velocity_obstacle
 from mmg_casadi.guidance.colregs_encounters import giveway_open
 from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams
@@ -172,14 +173,25 @@ METHODS: dict[str, Method] = {m.name: m for m in (
            inputs=(*(f"cv_{k}" for k in _CV_FIELDS), "cv_r_look"), goal_capture=True, memory=colregs_vortex.MEMORY,
            commands_speed=True, wall_inputs=LAND_INPUTS, turn_limit="cv_dpsi_free", lookout="cv_r_look",
            engaged=giveway_open, rule9=True),
+    Method(sb_mpc.NAME, sb_mpc.sb_mpc_command, (),
+           "Johansen, Perez & Cristofaro 2016 (IEEE T-ITS 17(12)): scenario-based MPC over course offsets and "
+           "propulsion levels, with the transitional (Hagen et al. 2018) and grounding (Tengesdal et al. 2022) "
+           "costs (mmg_casadi.guidance.sb_mpc)",
+           inputs=("engine_dead_slow",), goal_capture=True, memory=sb_mpc.MEMORY, commands_speed=True,
+           engaged=sb_mpc.engaged, params=sb_mpc.PARAMS, sensing="sb_mpc_range"),
 )}
 """Every method, by name (:func:`register` adds one)."""
 
 NAMES: tuple[str, ...] = tuple(METHODS)
 """Method names in registry order (the shipped methods)."""
 
-AVOIDING: tuple[str, ...] = tuple(n for n, m in METHODS.items() if m.builder is not None)
-"""Shipped methods that avoid collisions (all but ``"none"``)."""
+PLANNERS: tuple[str, ...] = ("sb-mpc",)
+"""Shipped predictive planners: methods that the quick studies (``mmg-casadi study all``) do not run unless asked
+(``--methods``); their place is the Monte Carlo study."""
+
+AVOIDING: tuple[str, ...] = tuple(n for n, m in METHODS.items() if m.builder is not None and n not in PLANNERS)
+"""Shipped reactive methods that avoid collisions (all but ``"none"`` and the :data:`PLANNERS`): the quick
+studies' default."""
 
 PAPER_STATISTICS: tuple[str, ...] = ("modified-vortex", "inverse-square", "velocity-obstacle")
 """Methods compared by the paper's statistical analysis."""
@@ -234,12 +246,28 @@ def _check_method(method: Method) -> Method:
             if k not in numeric:
                 raise InputError(f"method.{attr}", "names of numeric table parameters (see `mmg-casadi params`; "
                                  "angles without _deg)", k)
-    for attr in ("turn_limit", "lookout"):
+    if method.lookout is not None and method.sensing is not None:
+        raise InputError("method.sensing", "None when the method has a lookout (one of the two ranges)",
+                         method.sensing)
+    for attr in ("turn_limit", "lookout", "sensing"):
         value = getattr(method, attr)
         if value is not None and value not in method.step_inputs:
             raise InputError(f"method.{attr}", "None or one of the method's inputs "
                              f"({', '.join(method.step_inputs)})", value)
     return dataclasses.replace(method, params=tuple(own))
+
+
+def _enter_shipped() -> None:
+    """Enter the own parameters of the shipped methods that declare some into the parameter table, as
+    :func:`register` does for a plugin's."""
+    for name, method in list(METHODS.items()):
+        if method.params and not any(p.name in PARAMETERS for p in method.params):
+            method = _check_method(method)
+            add_group(name, method.params)
+            METHODS[name] = method
+
+
+_enter_shipped()
 
 
 _FORGET: list[Callable] = []
@@ -392,7 +420,7 @@ def get(name, field: str = "method", cls=InputError) -> Method:
     >>> get("vortex")
     Traceback (most recent call last):
     ...
-    mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, velocity-obstacle-speed, none, colregs-vortex, got 'vortex'
+    mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, velocity-obstacle-speed, none, colregs-vortex, sb-mpc, got 'vortex'
     """
     if not isinstance(name, str) or name not in names():
         raise cls(field, f"one of: {', '.join(METHODS)}", name)
