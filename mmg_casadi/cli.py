@@ -278,8 +278,9 @@ def build_parser() -> argparse.ArgumentParser:
                             "(fraction of design speed, direction uniform), e.g. 0-0.1")
             sp.add_argument("--wind", default=None, metavar="LO-HI", help="per-run true wind speed range (m/s, "
                             "direction uniform), e.g. 0-15")
-            sp.add_argument("--targets", default=None, help="avoid | hold: the sampled target ships avoid with "
-                            "the study's method (default) or hold course and speed (same as --set targets=VALUE)")
+            sp.add_argument("--targets", default=None, help="avoid | hold | METHOD: the sampled target ships avoid "
+                            "with the study's method (default), hold course and speed, or avoid with METHOD whatever "
+                            "the study's method (same as --set targets=VALUE)")
             sp.add_argument("--vessels", default=None, help="hulls of the sampled target ships: own (default, the "
                             "own ship's), a vessel name, or two separated by a comma that the targets take in turn, "
                             "e.g. kvlcc2,kcs (mixed traffic; same as --set target_vessels=VALUE)")

@@ -173,6 +173,12 @@ class Param:
 
 _P = Param
 _REAL = dict(low=None, high=None)
+
+TARGET_METHODS = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle", "velocity-obstacle-speed",
+                  "colregs-vortex", "nmpc")
+"""Methods the sampled target ships of a study may use whatever the study's method (parameter ``targets``): the
+shipped avoiding methods (:data:`mmg_casadi.guidance.methods.AVOIDING` and the on-demand ones; a test keeps the
+lists equal)."""
 PARAMETERS: dict[str, Param] = {p.name: p for p in (
     # simulation
     _P("dt", 0.25, 0.0, 2.0, "L/U", "guidance step; the rudder command is held over it (RK4, one step)",
@@ -394,10 +400,12 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "§Statistical Analysis); ntnu-2023: Hagen et al. 2023 (Ocean Eng. 288); every threshold's source in "
        "mmg_casadi.colregs.profiles", "outcome", kind="choice", choices=tuple(SCORING_PROFILES)),
     _P("targets", "avoid", None, None, "", "what the sampled target ships of the statistical study do: 'avoid' "
-       "(every ship uses the study's method) or 'hold' (ships other than the own ship hold course and speed, "
-       "method 'none'); only the study's sampled scenarios read it", "avoid: the paper's statistical analysis; "
-       "hold: the own ship alone responsible, as the Imazu study's held targets", "outcome", kind="choice",
-       choices=("avoid", "hold")),
+       "(every ship uses the study's method), 'hold' (ships other than the own ship hold course and speed, "
+       "method 'none') or avoid with the method named (every method of the study then meets the same targets); "
+       "only the study's sampled scenarios read it", "avoid: the paper's statistical analysis; "
+       "hold: the own ship alone responsible, as the Imazu study's held targets; a method: a planner too costly "
+       "for every ship of a Monte Carlo (nmpc) on the own ship only", "outcome", kind="choice",
+       choices=("avoid", "hold") + TARGET_METHODS),
     _P("target_slowdown", 0.0, 0.0, 0.6, "", "fraction of its speed every sampled target ship takes off halfway "
        "along its route (a waypoint at the midpoint, the reduced speed on the leg to the goal); 0: constant speed; "
        "only the study's sampled scenarios read it", "0: the paper's constant-speed targets; at most 0.6 keeps "
@@ -460,9 +468,25 @@ def check_value(name: str, value, *, field: str | None = None, cls=ParameterErro
     ...
     mmg_casadi.errors.ParameterError: params.r_saf: expected a parameter name (one of: dt, t_max, ...
     """
-    if name not in PARAMETERS:
+    if name not in PARAMETERS and not any(hook(name) for hook in _UNKNOWN_HOOKS):
         raise cls(field or name, f"a parameter name (one of: {', '.join(PARAMETERS)})")
     return PARAMETERS[name].check(value, field=field, cls=cls)
+
+
+_UNKNOWN_HOOKS: list = []
+"""Callables ``name -> bool`` asked about a name not in the table before it is refused (the method registry's
+on-demand methods, :func:`mmg_casadi.guidance.methods.load_on_demand`); True when the name is in the table now."""
+
+
+def on_unknown_parameter(hook) -> None:
+    """Have :func:`check_value` ask ``hook(name)`` about a parameter name not in the table before refusing it.
+
+    Parameters
+    ----------
+    hook : callable
+        ``name -> bool``: True if it entered ``name`` into :data:`PARAMETERS`.
+    """
+    _UNKNOWN_HOOKS.append(hook)
 
 
 def resolve(*layers: dict | None, cls=ParameterError, prefix: str = "") -> dict:

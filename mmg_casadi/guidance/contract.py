@@ -107,6 +107,11 @@ class GuidanceInputs:
         land test exists only in layouts with walls).
     half_beam : SX, optional
         Half the ship's beam (L), given with ``walls``.
+    own : dict, optional
+        Only for a method with ``own_state``: the ship's own state and engine, by name: ``u``, ``v`` (U, through
+        the water), ``r`` (rad per L/U), ``delta`` (rudder angle, rad), ``n_prop`` (rev/min), ``rpm_min``,
+        ``rpm_max`` (the propeller speeds a method may order), ``engine_rate`` (rev/min per L/U) and
+        ``engine_lag`` (L/U); empty for every other method.
     """
 
     pos: object
@@ -124,6 +129,11 @@ class GuidanceInputs:
     service_rpm: object = None
     walls: object = None
     half_beam: object = None
+    own: dict = dataclasses.field(default_factory=dict)
+
+
+OWN_STATE: tuple[str, ...] = ("u", "v", "r", "delta", "n_prop", "rpm_min", "rpm_max", "engine_rate", "engine_lag")
+"""The entries of :attr:`GuidanceInputs.own`, in the order the sparse step passes them."""
 
 
 @dataclass(frozen=True)
@@ -200,6 +210,13 @@ class Method:
     prefix : str or None
         The prefix of every name in ``params``; ``None``: the method's name with ``-`` and ``.`` as ``_``, plus
         ``_`` (``"starboard-rule"`` -> ``"starboard_rule_"``).
+    own_state : bool
+        The builder also gets the ship's own state and engine (:attr:`GuidanceInputs.own`), e.g. for a planner
+        that predicts with a model of the ship.
+    tallies : tuple of str
+        Memory rows that count events over a run (e.g. solves and failures of a planner): they start at 0, take the
+        builder's value while the method steers and keep their value otherwise (never reset to the heading); the
+        run's outputs report them (:func:`~mmg_casadi.guidance.methods.tallies_of`).
     """
 
     name: str
@@ -216,6 +233,8 @@ class Method:
     engaged: Callable | None = None
     params: tuple = ()
     prefix: str | None = None
+    own_state: bool = False
+    tallies: tuple[str, ...] = ()
 
     @property
     def param_prefix(self) -> str:

@@ -64,6 +64,7 @@ from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceR
 from mmg_casadi.montecarlo.execution import (DEFAULT_CHUNK, _non_default, _run_disturbances, layout_for,
                                              profile_columns, sampled_scenario)
 from mmg_casadi.montecarlo.results import ResultsTable, summarize
+from mmg_casadi.montecarlo.tallies import TallyTable, summarize as tally_summary, to_markdown as tallies_markdown
 from mmg_casadi.montecarlo.sampling import ALL_ENVIRONMENTS, parse_envs
 from mmg_casadi.params import PARAMETERS, diff, resolve
 from mmg_casadi.progress import progress_bar
@@ -142,7 +143,8 @@ def check_study_args(*, runs=200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS,
     batch_size = _check_int("batch_size", batch_size, 1)
     chunk = _check_int("chunk", chunk, 1)
     resolved = resolve(params, prefix="params.")
-    method_registry.check_run((*methods, "none"), params)  # targets that hold use "none"
+    target_method = {"avoid": (), "hold": ("none",)}.get(resolved["targets"], (resolved["targets"],))
+    method_registry.check_run((*methods, "none", *target_method), params)  # targets that hold use "none"
     ranges = DisturbanceRanges(current=current, wind=wind)
     for name, rng in (("current", ranges.current), ("wind", ranges.wind)):
         for key in (f"{name}_speed", f"{name}_direction_deg"):
@@ -238,6 +240,7 @@ def _exclusive(out: Path):
 def _run_study(out, runs, envs, methods, base_seed, params, backend, address, workers, progress, batch_size,
                chunk, executor, ranges=DisturbanceRanges()):
     table = ResultsTable(out / "runs.csv")
+    tally_table = TallyTable(out / "tallies.csv")
     planned = {(e, m, r) for e in envs for m in methods for r in range(runs)}
     done = check_resumable(out, runs=runs, envs=envs, methods=methods, base_seed=base_seed, params=params,
                            ranges=ranges)  # again, under the lock
@@ -263,6 +266,7 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
                 bar = progress_bar(len(planned), desc="statistics", initial=len(done))
             try:
                 for _task, rows in executor.run(tasks):
+                    tally_table.append(rows)  # first: a run's counts are never missing for a stored row
                     written = table.append(rows)
                     new_runs += written
                     if bar is not None:
@@ -301,8 +305,14 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
     config = {"runs": runs, "envs": list(envs), "methods": list(methods), "base_seed": base_seed,
               "backend": backend, "address": address, "workers": workers, "batch_size": batch_size, "chunk": chunk,
               **ranges.to_dict()}
+    counted = tally_summary([r for r in tally_table.read() if (r["environment"], r["method"], r["run"]) in planned])
+    if counted:  # a method with tallies (nmpc's solves and fallbacks): their sums, beside summary.md's tables
+        with open(out / "summary.md", "a", encoding="utf-8") as fh:
+            fh.write("\n## Tallies of the own ship (tallies.csv; mmg_casadi.montecarlo.tallies)\n\n"
+                     + tallies_markdown(counted) + "\n")
     write_json(out / "metrics.json", {
         "config": config, "params": params, "summary": summary.rows, "comparisons": comparisons,
+        **({"tallies": counted} if counted else {}),
         "colregs": {"by_encounter": by_encounter, "comparisons": encounter_pairs},
         "runs_total": len(rows),
         "runs_new": new_runs, "elapsed_s": elapsed, "failure_files": [str(p.relative_to(out)) for p in failures]})

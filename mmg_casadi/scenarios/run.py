@@ -56,6 +56,7 @@ from mmg_casadi.closed_loop.outcome import ship_outcomes
 from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.closed_loop.replay import REPLAY
 from mmg_casadi.closed_loop.simulation import Trajectory, simulate
+from mmg_casadi.closed_loop.state import tallies
 from mmg_casadi.colregs.assess import assess_pair
 from mmg_casadi.colregs.classify import get_profile
 from mmg_casadi.colregs.narrow_channel import rule9
@@ -356,6 +357,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     final = np.concatenate([[t_end], traj.final.ravel()])
     banks = scenario_segments(sc)
     ships = []
+    counts = tallies(traj.layout, final)  # a planner's counts over the run (Method.tallies), if any
     for i, (s, o) in enumerate(zip(sc.ships, ship_outcomes(traj.layout, final, params))):
         ships.append({
             "name": s.name,
@@ -376,6 +378,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
             "rule9": _rule9(traj, i, mask[:, i], banks),
             **(_speed_metrics(s, traj, i, mask[:, i], o["time_to_goal"], params["goal_tolerance"])
                if getattr(s, "track", None) is None else _replay_speed_metrics(traj, i, mask[:, i])),
+            **({"tallies": counts[i]} if counts[i] else {}),
         })
     pairs = []
     labels: dict = {}
