@@ -17,13 +17,14 @@ import mmg_casadi  # noqa: E402
 
 project = "mmg-casadi"
 author = "mmg-casadi contributors"
-copyright = "the mmg-casadi contributors, MIT licence"
+copyright = "the mmg-casadi contributors, BSD-3-Clause licence"
 release = version = mmg_casadi.__version__
 
 extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax copied into _static: the equations render without a network
     "numpydoc",
     "myst_nb",
     "mmg_docs",

@@ -16,14 +16,18 @@ more often than Ray retries it) prints one line and exits with status 1; its fin
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import json
+import os
 import shutil
 import sys
 import tempfile
 import tomllib
 from pathlib import Path
 
+from mmg_casadi import __version__
+from mmg_casadi import compiled
 from mmg_casadi.errors import InputError, RunError
 from mmg_casadi.guidance import methods as registry, plugins
 from mmg_casadi.io import check_output, write_json, write_text
@@ -32,7 +36,7 @@ from mmg_casadi.montecarlo.disturbance_sampling import parse_range
 from mmg_casadi.montecarlo.sampling import parse_envs, sample_traffic
 from mmg_casadi.params import PARAMETERS, check_value, help_text, load_file, markdown_table
 from mmg_casadi.determinism import compare_outputs
-from mmg_casadi.scenarios.ais_replay import TARGETS, ais_scenario, load_ais_csv, parse_time
+from mmg_casadi.scenarios.ais_replay import REPLAY_METHOD, TARGETS, ais_scenario, load_ais_csv, parse_time
 from mmg_casadi.scenarios.generate import generate, load_description, override, standard_description, write_set
 from mmg_casadi.scenarios.interchange import convert_file
 from mmg_casadi.scenarios.maritime_schema import load_traffic_situation
@@ -45,14 +49,43 @@ from mmg_casadi.vessel.maneuvers import speed_change, turning_circle, validate_m
 QUICK_STUDIES = ("waypoint-square", "static-obstacle", "colregs", "conflict", "narrow-channel")
 STUDIES = QUICK_STUDIES + ("land", "imazu", "encounters", "disturbance", "statistics", "sweep", "labelled",
                            "profiles", "paper", "all")
+STUDY_HELP = {
+    "waypoint-square": "ILOS + PD heading control around the paper's waypoint square (CE, MCTE)",
+    "static-obstacle": "the paper's static obstacle: goal at 50 L and 60 L, an obstacle off the starboard bow",
+    "colregs": "the paper's head-on, crossing and overtaking encounters (COLREG Rules 13-15)",
+    "conflict": "the paper's three ships with conflicting responsibilities",
+    "narrow-channel": "the paper's head-on encounter in a channel 10 L wide",
+    "land": "the shipped land scenarios (strait, fjord with an island, channel with land banks)",
+    "imazu": "the 22 Imazu problems, targets holding course and/or avoiding",
+    "encounters": "an encounter set of `mmg-casadi generate`, paired by situation",
+    "disturbance": "ILOS integral action and the encounters in a beam current and wind",
+    "statistics": "the Monte Carlo study of the paper's environments (resumable)",
+    "sweep": "one parameter swept over values, paired against a baseline (resumable)",
+    "labelled": "the hand-labelled COLREG cases under every scoring profile",
+    "profiles": "one method's COLREG compliance under each step from the laboratory profile to the published one",
+    "paper": "every study of the paper and a claim-by-claim report",
+    "all": "the five quick studies (what `make run` runs)",
+}
+"""One line per study for ``mmg-casadi study --help``."""
 _FLAGS = {"base_seed": "--seed", "out_dir": "--out", "n_candidates": "--candidates", "search_seed": "--search-seed",
           "failure_weight": "--failure-weight"}
 """Library argument names whose flag is not ``--`` + the name with dashes."""
 
 
 class _CliError(InputError):
+    """An argparse error of the parser named ``field`` (``mmg-casadi simulate``)."""
+
     def __str__(self):
-        return f"{self.field}: {self.allowed}"
+        return f"{self.allowed} (see '{self.field} --help')"
+
+
+_LINE_BREAKS = {c: c.encode("unicode_escape").decode("ascii")
+                for c in "\n\r\v\f\x1c\x1d\x1e\x85\u2028\u2029"}
+
+
+def _error_line(e) -> str:
+    """``mmg-casadi: error: …`` as one line: a line break inside a given value (e.g. a file name) is escaped."""
+    return "mmg-casadi: error: " + str(e).translate(str.maketrans(_LINE_BREAKS))
 
 
 class _Parser(argparse.ArgumentParser):
@@ -107,6 +140,11 @@ def _add_params(p: argparse.ArgumentParser) -> None:
                    "see `mmg-casadi params`")
     p.add_argument("--set", dest="settings", action="append", default=[], metavar="NAME=VALUE",
                    help="one parameter (repeatable; wins over --params), e.g. --set r_safe=10")
+
+
+def _add_quiet(p: argparse.ArgumentParser, default) -> None:
+    p.add_argument("-q", "--quiet", action="store_true", default=default, help="say nothing on stderr but errors "
+                   "(no compile notices, progress or summary)")
 
 
 def _add_determinism(p: argparse.ArgumentParser) -> None:
@@ -181,6 +219,8 @@ def build_parser() -> argparse.ArgumentParser:
                            metavar="{maneuver,vessels,identify,simulate,scenarios,study,tune,convert,traffic,"
                                    "generate,replay,params}")
     sub.required = True
+    p.add_argument("--version", action="version", version=f"mmg-casadi {__version__}")
+    _add_quiet(p, False)
 
     m = sub.add_parser("maneuver", help="standard manoeuvres: turning circle, zig-zag, speed change")
     m.add_argument("kind", help="turning | zigzag | speed")
@@ -212,6 +252,11 @@ def build_parser() -> argparse.ArgumentParser:
     _add_params(s)
     _add_plugin(s)
     s.add_argument("--out", type=_path, required=True, help="output directory")
+    s.add_argument("--units", default="nd", help="units of the figure and the summary: nd (L, L/U, U; default) "
+                   "or si (m, s, kn)")
+    s.add_argument("--animate", nargs="?", const="animation.gif", default=None, metavar="FILE",
+                   help="also write an animation into the output directory: a .gif (default animation.gif) or "
+                   ".mp4 (needs the extra mmg-casadi[video])")
     _add_determinism(s)
 
     sub.add_parser("scenarios", help="list the packaged scenarios (name, ships, method, description)")
@@ -233,11 +278,7 @@ def build_parser() -> argparse.ArgumentParser:
     studies = st.add_subparsers(dest="study", parser_class=_Parser, metavar="{" + ",".join(STUDIES) + "}")
     studies.required = True
     for name in STUDIES:
-        sp = studies.add_parser(name, help={"all": "every quick study", "paper": "every study of the paper and "
-                                            "a claim-by-claim report", "labelled": "the hand-labelled COLREG "
-                                            "cases under every scoring profile", "profiles": "one method's "
-                                            "compliance under each step from the laboratory profile to the "
-                                            "published one"}.get(name, f"the {name} study"))
+        sp = studies.add_parser(name, help=STUDY_HELP[name])
         sp.add_argument("--out", type=_path, required=True, help="output directory")
         _add_determinism(sp)
         if name == "labelled":  # scripted cases at the table's defaults, judged under every profile
@@ -361,7 +402,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "list of report objects with these keys)")
     rp.add_argument("--own", required=True, help="MMSI of the own ship")
     rp.add_argument("--step", type=_float, default=60.0, help="resampling step of the routes [s] (default 60)")
-    rp.add_argument("--method", default=registry.DEFAULT, help="the own ship's method")
+    rp.add_argument("--method", default=REPLAY_METHOD, help=f"the own ship's method (default {REPLAY_METHOD}: a "
+                    "replayed route has a waypoint every --step, and the paper's fields, whose sink sits at the next "
+                    "waypoint, cannot give way so close to it)")
     rp.add_argument("--targets", default="track", help="track | route: the targets replay their recorded tracks "
                     "exactly, interpolated in time (default), or retrace their routes by waypoint tracking")
     rp.add_argument("--start", default=None, help="time at which the own ship starts from her recorded state "
@@ -372,7 +415,17 @@ def build_parser() -> argparse.ArgumentParser:
     pp = sub.add_parser("params", help="list every parameter (default, allowed values, unit, meaning, source)")
     pp.add_argument("--markdown", action="store_true", help="as a Markdown table")
     _add_plugin(pp)
+    for leaf in _leaves(p):
+        _add_quiet(leaf, argparse.SUPPRESS)  # also after the command: mmg-casadi simulate ... --quiet
     return p
+
+
+def _leaves(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """The parsers of every command that takes no sub-command."""
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        return [parser]
+    return [leaf for a in subs for sub in dict.fromkeys(a.choices.values()) for leaf in _leaves(sub)]
 
 
 def _params_of(a) -> dict | None:
@@ -438,8 +491,22 @@ def _simulate(a) -> dict:
         sc = load_scenario(a.file)
     if a.method:
         sc = with_method(sc, a.method)
+    from mmg_casadi.units import Units
+    Units.of(a.units)  # refused before any work
+    if a.animate is not None:
+        from mmg_casadi.animation import check_animation_path
+        check_animation_path(a.animate)
     res = run_scenario(sc, params=_params_of(a))
-    res.save(a.out)
+    units = Units.of(a.units, res.trajectory.layout.unit_vessel())  # the own ship's hull sets L and U
+    res.save(a.out, units=units if units.si else None)
+    if a.animate is not None:
+        from mmg_casadi.animation import animate
+        path = animate(res, a.out / a.animate, units=units)
+        if not a.quiet:
+            print(f"animation: {path}", file=sys.stderr)
+    if not a.quiet:
+        from mmg_casadi.scenarios.summary import ship_lines
+        print("\n".join(ship_lines(res.metrics, units)))
     return res.metrics
 
 
@@ -669,6 +736,17 @@ def _flag(field: str, a) -> str:
     return "--" + dest.replace("_", "-") if dest in vars(a) and dest not in ("params", "settings") else field
 
 
+@contextlib.contextmanager
+def _silenced(quiet: bool):
+    """With ``quiet``, what the command writes on stderr (notices, progress bars, study lines) goes nowhere;
+    errors are printed by :func:`main` after it."""
+    if not quiet:
+        yield
+        return
+    with open(os.devnull, "w") as null, contextlib.redirect_stderr(null):
+        yield
+
+
 def main(argv=None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status.
 
@@ -698,29 +776,33 @@ def main(argv=None) -> int:
                                                              getattr(a, "what", None)) if x)
                 raise InputError(extra[0], f"an option of '{prog}' (see '{prog} --help')")
             _check_out(a)
+            compiled.NOTICES["stream"] = None if a.quiet else "stderr"
             handlers = {"maneuver": _maneuver, "simulate": _simulate, "study": _study, "tune": _tune,
                         "convert": _convert, "traffic": _traffic, "generate": _generate, "replay": _replay,
                         "params": _params, "explain": _explain,
                         "scenarios": _scenarios, "vessels": _vessels, "identify": _identify}
-            handlers[a.command](a)
-            if getattr(a, "check_determinism", False):
-                return _check_determinism(a, handlers[a.command])
+            with _silenced(a.quiet):
+                handlers[a.command](a)
+                if getattr(a, "check_determinism", False):
+                    return _check_determinism(a, handlers[a.command])
     except _CliError as e:
-        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        print(_error_line(e), file=sys.stderr)
         return 2
     except InputError as e:
         if a is not None and not isinstance(e, _CliError):
             e = InputError(_flag(e.field, a), e.allowed, e.got)
-        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        print(_error_line(e), file=sys.stderr)
         return 2
     except RunError as e:
-        print(f"mmg-casadi: error: {e}", file=sys.stderr)
+        print(_error_line(e), file=sys.stderr)
         return 1
     except KeyboardInterrupt as e:
         what = ("finished results are kept; rerun the same command to resume" if _resumable(a) else
                 "this command does not resume: rerun it to start again")
         print(f"mmg-casadi: interrupted by {signal_name(e)} ({what})", file=sys.stderr)
         return exit_status(e)
+    finally:
+        compiled.NOTICES["stream"] = None  # the library stays silent after a command (e.g. in tests)
     return 0
 
 

@@ -26,6 +26,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import casadi as ca
@@ -39,6 +40,10 @@ WATCHDOG = Path(__file__).with_name("_watchdog.py")
 """The watchdog script the compiler runs under."""
 STOP_TIMEOUT = 10.0
 """Seconds to wait for the watchdog to stop the compiler and remove the build folder after an interruption."""
+NOTICES = {"stream": None}
+"""Where :func:`compile_function` says that it compiles (one line per library: what, then the seconds it took): a
+file, ``"stderr"`` (whatever ``sys.stderr`` is at the time), or ``None`` for silence (the default of the library;
+the command line sets ``"stderr"`` unless ``--quiet``). Nothing is said when the library is cached."""
 
 
 def cache_dir() -> Path:
@@ -108,7 +113,7 @@ def library_path(f: ca.Function, flags=DEFAULT_FLAGS, also=()) -> tuple[Path, st
     return cache_dir() / f"{f.name()}_{key}.so", src
 
 
-def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
+def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=(), *, label: str | None = None):
     """Return a natively compiled equivalent of ``f``, compiling only when the cache has no library for it.
 
     With ``also``, one library holds ``f`` and those Functions (their shared code compiled once) and the
@@ -126,6 +131,8 @@ def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
         C compiler flags passed to the compiler.
     also : sequence of casadi.Function, optional
         Further Functions to compile into the same library.
+    label : str, optional
+        What is compiled, in words, for the notice of :data:`NOTICES` (default: the Function's name).
 
     Returns
     -------
@@ -143,7 +150,18 @@ def compile_function(f: ca.Function, flags=DEFAULT_FLAGS, also=()):
     if so.exists() and not library_is_complete(so):
         so.unlink(missing_ok=True)  # e.g. cut short by a crash of an older version: loading it could crash
     if not so.exists():
-        _build(f.name(), src, so, flags)
+        stream = sys.stderr if NOTICES["stream"] == "stderr" else NOTICES["stream"]
+        if stream is not None:
+            print(f"compiling {label or f.name()} … ", end="", file=stream, flush=True)
+        t0 = time.perf_counter()
+        try:
+            _build(f.name(), src, so, flags)
+        except BaseException:
+            if stream is not None:
+                print("stopped", file=stream, flush=True)
+            raise
+        if stream is not None:
+            print(f"{time.perf_counter() - t0:.0f} s (cached for next time)", file=stream, flush=True)
     if also:
         return [ca.external(g.name(), str(so)) for g in (f, *also)]
     return ca.external(f.name(), str(so))

@@ -399,6 +399,10 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "sector (paper Table 3, "
        "§Statistical Analysis); ntnu-2023: Hagen et al. 2023 (Ocean Eng. 288); every threshold's source in "
        "mmg_casadi.colregs.profiles", "outcome", kind="choice", choices=tuple(SCORING_PROFILES)),
+    _P("colregs_all_profiles", False, None, None, "", "score every run of a statistics study under every scoring "
+       "profile (runs.csv colregs_verdicts_<profile>, colregs.csv, summary.md), not only colregs_profile; about 2.5 "
+       "times the scorer's time", "our choice: off, so that the scorer adds at most 10 % to a study "
+       "(benchmarks/colregs_scoring.py)", "outcome", kind="bool"),
     _P("targets", "avoid", None, None, "", "what the sampled target ships of the statistical study do: 'avoid' "
        "(every ship uses the study's method), 'hold' (ships other than the own ship hold course and speed, "
        "method 'none') or avoid with the method named (every method of the study then meets the same targets); "

@@ -12,11 +12,13 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from mmg_casadi.guidance import methods as registry
 from mmg_casadi.io import write_json
 from mmg_casadi.params import resolve
-from mmg_casadi.plotting import COLORS, FIGURE_DPI, draw_circle, draw_goal, draw_path, marine_axes
+from mmg_casadi import figstyle as fs
+from mmg_casadi.plotting import plot_paths, tick_step
 from mmg_casadi.scenarios.scenario import with_method
 from mmg_casadi.scenarios.run import run_scenario, write_outputs
 
@@ -69,45 +71,84 @@ def _run_cases(cases: dict, methods, out: Path, params, title: str, results: dic
         plot_comparison(results[case], out / f"{case}.png", title=f"{title} {case}".strip())
 
 
+@fs.styled
 def plot_comparison(by_method: dict, path, title="") -> Figure:
-    """One panel per method: paths (marine view), R_safe circles around obstacles, goals; plus a distance panel."""
+    """The encounter strip: one map per method (three to a row, the style of :mod:`mmg_casadi.figstyle`: start ○,
+    goal ☆, hulls to scale, time ticks, R_safe and the closest approach marked), and below them one panel of the
+    own ship's distance to its nearest ship or obstacle over time, one line per method, with the collision
+    distance.
+
+    Parameters
+    ----------
+    by_method : dict
+        Method name → :class:`~mmg_casadi.scenarios.run.ScenarioResult` of the same case.
+    path : str or Path
+        File to save to (PNG at 300 dpi, or ``.svg`` / ``.pdf``).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     n = len(by_method)
-    fig = Figure(figsize=(4.2 * n, 8), layout="constrained")
-    gs = fig.add_gridspec(2, n, height_ratios=[2.2, 1])
-    for col, (m, r) in enumerate(by_method.items()):
-        ax = fig.add_subplot(gs[0, col])
-        tr, sc = r.trajectory, r.scenario
-        mask = tr.sailing_mask()
-        for i, s in enumerate(sc.ships):
-            c = COLORS[i % len(COLORS)]
-            k = mask[:, i]
-            lab = s.name + (f" ({r.encounter_labels[i]})" if i in r.encounter_labels else "")
-            draw_path(ax, tr.state("x", i)[k], tr.state("y", i)[k], tr.state("psi", i)[k], c, label=lab,
-                      n_outlines=5)
-            g = s.waypoints[-1]
-            draw_goal(ax, g[0], g[1], c, tol=r.params["goal_tolerance"])
-        for o in sc.obstacles:
-            ax.plot(o.position[1], o.position[0], "ko", ms=4)
-            draw_circle(ax, o.position[0], o.position[1], r.params["r_safe"], color="r", lw=0.8)
-        for w in sc.walls:
-            pts = np.asarray(w.points)
-            ax.plot(pts[:, 1], pts[:, 0], "k-", lw=2)
-        marine_axes(ax)
+    cols = min(3, n)
+    rows = -(-n // cols)
+    fig = Figure(figsize=(fs.PAGE, 0.42 * fs.PAGE * rows * 3 / cols + 0.3 * fs.PAGE), layout="constrained")
+    gs = fig.add_gridspec(rows + 1, cols, height_ratios=[1.0] * rows + [0.55])
+    spare = rows * cols > n  # an empty slot in the maps' grid holds the legends
+    dist = fig.add_subplot(gs[rows, :] if spare or cols == 1 else gs[rows, :cols - 1])
+    maps, flags = [], dict(collision=False, cpa=False)
+    step = tick_step(max(float(r.trajectory.t[-1]) for r in by_method.values()))
+    for k, (m, r) in enumerate(by_method.items()):
+        ax = fig.add_subplot(gs[k // cols, k % cols])
+        maps.append(ax)
         st = "COLLISION" if r.metrics["collision"] else "no collision"
-        ax.set_title(f"{m}: {st}", fontsize=9)
-        ax.legend(fontsize=7, loc="best")
-        a2 = fig.add_subplot(gs[1, col])
-        for (a, b), d in r.pair_distances().items():
-            inside = d <= r.params["r_safe"]
-            if np.any(inside):
-                a2.plot(tr.t, np.where(inside, d, np.nan), label=f"{a}–{b}")
-        cd = r.params["collision_distance"]
-        a2.axhline(cd, color="k", ls="--", lw=1, label=f"{cd:g} L")
-        a2.set_xlabel("t [L/U]")
-        a2.set_ylabel("distance inside R_safe [L]")
-        a2.grid(True, alpha=0.3)
-        a2.legend(fontsize=7)
+        d_min = min((p["min_distance"] for p in r.metrics["pairs"]), default=float("nan"))
+        plot_paths(r, ax, title=f"{m}\n{st}, closest {d_min:.2f} L", legend=False, n_outlines=3,
+                   ticks=step)
+        flags["collision"] |= bool(r.metrics["collision"])
+        flags["cpa"] |= any(p["b"] in r.names() and p["min_distance"] <= r.params["r_safe"]
+                            for p in r.metrics["pairs"] if p["a"] == r.names()[0])
+        d = r.own_distance()
+        inside = d <= r.params["r_safe"]
+        style = _METHOD_STYLES[k % len(_METHOD_STYLES)]
+        dist.plot(r.trajectory.t, np.where(inside, d, np.nan), label=m, **style)
+    lims = np.array([[*a.dataLim.intervalx, *a.dataLim.intervaly] for a in maps])
+    lo_x, hi_x, lo_y, hi_y = lims[:, 0].min(), lims[:, 1].max(), lims[:, 2].min(), lims[:, 3].max()
+    pad = 0.04 * max(hi_x - lo_x, hi_y - lo_y)
+    for a in maps:  # one scale for every method (axes sharing would refuse the equal aspect)
+        a.set_xlim(lo_x - pad, hi_x + pad)
+        a.set_ylim(lo_y - pad, hi_y + pad)
+        a.set_aspect("equal", adjustable="box")
+    cd = next(iter(by_method.values())).params["collision_distance"]
+    dist.axhline(cd, color=fs.COLLISION, ls="--", lw=0.8, label=f"collision ({cd:g} L)")
+    dist.set_xlabel("t [L/U]")
+    dist.set_ylabel("own ship: nearest\ninside R_safe [L]")
+    dist.grid(True)
+    first = next(iter(by_method.values()))
+    sc = first.scenario
+    handles = [Line2D([], [], color=fs.ship_color(i), label=s.name + (" (own)" if i == 0 else ""))
+               for i, s in enumerate(sc.ships)]
+    handles += fs.legend_handles(r_safe=True, obstacle=bool(sc.obstacles), wall=bool(sc.walls), land=bool(sc.land),
+                                 ticks=step, **flags)
+    key = fig.add_subplot(gs[rows - 1, cols - 1] if spare else gs[rows, cols - 1]) if cols > 1 else None
+    if key is None:
+        dist.legend(loc="upper right")
+    else:
+        key.axis("off")
+        lines = dist.get_legend_handles_labels()
+        key.add_artist(key.legend(*lines, loc="upper center", ncols=1 if spare else 2, fontsize=5.5,
+                                  title="own ship's distance"))
+        key.legend(handles=handles, loc="lower center", ncols=2, fontsize=5.5)
     if title:
-        fig.suptitle(title)
-    fig.savefig(path, dpi=FIGURE_DPI)
+        fig.suptitle(title, fontsize=8.5)
+    fs.save(fig, path)
     return fig
+
+
+_METHOD_STYLES = tuple(dict(color=c, ls=ls) for c, ls in zip(
+    ("#000000", "#666666", "#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#8C564B"),
+    ("-", "--", "-", "-.", ":", "-", "--", "-.")))
+"""Line style of each method in the distance panel (the maps keep the colour per ship)."""

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from mmg_casadi.colregs.profiles import iitm_lab, published
 from mmg_casadi.guidance import methods as registry
+from mmg_casadi.guidance.plugins import ensure
 from mmg_casadi.io import write_json
 from mmg_casadi.limits import check_runs
 from mmg_casadi.montecarlo.batching import BatchTask, LocalExecutor, plan_batches, prepare_layouts
@@ -93,9 +94,30 @@ def step_column(k: int) -> str:
 
 @dataclass(frozen=True)
 class LadderTask(BatchTask):
-    """A batch of runs simulated once and scored under every step (see :class:`BatchTask`)."""
+    """A batch of runs simulated once and scored under every step of :data:`LADDER`.
+
+    Parameters
+    ----------
+    environment : int
+        Environment of the runs.
+    method : str
+        Method of every ship.
+    runs : tuple of int
+        Run indices.
+    base_seed : int, default 0
+        Base seed of the scenario sampling.
+    params : tuple, optional
+        Sorted ``(name, value)`` pairs of the parameter overrides.
+    chunk : int, optional
+        Steps per ``mapaccum`` chunk.
+    disturbance : DisturbanceRanges or None, optional
+        Ranges of the per-run disturbance.
+    plugins : tuple, optional
+        Plugins the workers load (:class:`~mmg_casadi.montecarlo.batching.BatchTask`).
+    """
 
     def __call__(self) -> list[dict]:
+        ensure(self.plugins)
         histories: dict = {}
         rows = run_batch(self.environment, self.method, list(self.runs), self.base_seed, params=dict(self.params),
                          chunk=self.chunk, disturbance=self.disturbance, histories=histories)

@@ -333,9 +333,24 @@ def check_site(html: Path) -> None:
     theory = (html / "theory.html").read_text(encoding="utf-8")
     assert theory.count('class="math notranslate nohighlight"') >= 15, "theory: too few equations"
     assert "mathjax" in theory.lower()
+    scripts = re.findall(r'<script[^>]+src="([^"]*mathjax[^"]*)"', theory, flags=re.I)
+    assert scripts and all(not s.startswith(("http:", "https:", "//")) for s in scripts), scripts  # offline
+    assert all((html / s.split("?")[0]).exists() for s in scripts), scripts
     for label in ("mmg_nd", "psi_desired", "PD_control", "modified_vortex", "factor_f"):
         assert f'id="equation-{label.lower().replace("_", "-")}"' in theory, f"theory: no equation ({label})"
     assert "mmg_casadi.guidance.velocity_obstacle.velocity_obstacle" in theory
+    # Results: the tables of the one results file, as README shows them; the figure-style page's before/after images.
+    from studies.results import BLOCKS, load
+    page = (html / "results.html").read_text(encoding="utf-8")
+    data = load()
+    for r in data.get("statistics", [])[:3]:
+        assert f"{100 * r['success']:.1f} %" in page, r["method"]
+    assert data["quick"]["cases"] and f"{data['quick']['waypoint_square']['ce']:.4f}" in page
+    assert len(BLOCKS) >= 9
+    figures = (html / "figures.html").read_text(encoding="utf-8")
+    shown = re.findall(r'<img[^>]+src="([^"]+\.png)"', figures)
+    assert len(shown) >= 16 and all((html / s).exists() for s in shown), shown  # eight figures, before and after
+    assert re.search(r'<img[^>]+src="[^"]+\.gif"', gallery), "gallery: no animation"
     # References and changelog.
     refs = _text((html / "references.html").read_text(encoding="utf-8"))
     assert "Jadhav" in refs and "Somayajula" in refs

@@ -17,7 +17,8 @@ RUNS = 20
 @pytest.fixture(scope="module")
 def study(tmp_path_factory):
     out = tmp_path_factory.mktemp("study")
-    run_study(out, runs=RUNS, envs=(5,), methods=("colregs-vortex",), workers=1, progress=False, batch_size=8)
+    run_study(out, runs=RUNS, envs=(5,), methods=("colregs-vortex",), workers=1, progress=False, batch_size=8,
+              params={"colregs_all_profiles": True})
     return out
 
 

@@ -69,6 +69,12 @@ def no_work(monkeypatch):
     monkeypatch.setattr(cli_apf, "training_set", _work)  # tune apf
     monkeypatch.setattr(cli_pd, "design_pd", _work)  # tune pd
     monkeypatch.setattr(cli, "generate", _work)  # generate (after its description and options are read)
+    import mmg_casadi.montecarlo.explain as explain
+    import studies.labelled as labelled
+    import studies.profiles as profiles
+    monkeypatch.setattr(labelled, "simulate_case", _work)  # study labelled
+    monkeypatch.setattr(profiles, "prepare_layouts", _work)  # study profiles (after its arguments are checked)
+    monkeypatch.setattr(explain, "run_batch", _work)  # explain (after the study's record is read)
 
 
 @pytest.fixture(scope="module")

@@ -242,7 +242,8 @@ def compiled_augmented_step(layout: Layout, config: SafetyConfig = SafetyConfig(
     casadi.Function
         The compiled ``(z, p) ↦ z_next``.
     """
-    return compile_function(build_augmented_step(layout, config), FLAGS)
+    return compile_function(build_augmented_step(layout, config), FLAGS,
+                            label=f"smoothed closed loop with sensitivities for {layout.n_ships} ships")
 
 
 @lru_cache(maxsize=32)

@@ -167,3 +167,210 @@ def distance_from_obstacle(point, obstacle=(-10.0, 0.0)) -> float:
         The distance (L).
     """
     return float(np.hypot(*(np.asarray(point, float) - np.asarray(obstacle, float))))
+
+
+# -- several obstacles, moving targets, classification and a brute-force check ---------------------------------
+
+def scene_function(field: str = "inverse-square", goal=(10.0, 0.0), obstacles=((-10.0, 0.0),), *, targets=(),
+                   radius: float = 0.5, **params) -> ca.Function:
+    """CasADi Function ``V(pos)`` of ``field`` for several static ``obstacles`` and moving ``targets``.
+
+    Every obstacle and target is an active neighbour. A target is ``((x, y), (vx, vy))``: a ship at that position
+    with that velocity over the ground (fractions of U); only the modified vortex reads velocities (its vortex
+    acts on a neighbour that is not drawing clear), the other fields see a target as an obstacle where it is.
+    The plane is that of one instant: the own ship at every point with the heading and speed of ``params``.
+
+    Parameters
+    ----------
+    field : {"inverse-square", "sink-vortex", "modified-vortex"}
+        The field.
+    goal : (float, float)
+        Goal (L).
+    obstacles : sequence of (float, float)
+        Static obstacle centres (L).
+    targets : sequence of ((float, float), (float, float))
+        Moving ships: position (L) and velocity (U).
+    radius : float
+        Radius of every neighbour (L; the inverse-square field's R_obs).
+    **params
+        Field parameters overriding the defaults (:func:`field_params`).
+
+    Returns
+    -------
+    casadi.Function
+        ``scene_<name>(pos) -> v``.
+
+    Examples
+    --------
+    >>> F = scene_function("sink-vortex", obstacles=[(-10, 0), (-10, 6)])
+    >>> [round(float(c), 4) for c in F([0.0, -5.0]).nz]
+    [1.1304, 0.4373]
+    """
+    prm = field_params(field, **params)
+    pos = ca.SX.sym("pos", 2)
+    goal = ca.DM(np.asarray(goal, float).reshape(2, 1))
+    cols = [np.asarray(o, float) for o in obstacles] + [np.asarray(p, float) for p, _ in targets]
+    vels = [np.zeros(2)] * len(obstacles) + [np.asarray(v, float) for _, v in targets]
+    if not cols:
+        raise InputError("obstacles", "at least one obstacle or target", "none")
+    nb, nb_vel = ca.DM(np.column_stack(cols)), ca.DM(np.column_stack(vels))
+    m = len(cols)
+    on = [1.0] * m
+    if field == "inverse-square":
+        v = inverse_square(pos, goal, nb, [radius] * m, on, k_att=prm["k_att"], k_rep=prm["k_rep"], d0=prm["d0"])
+    elif field == "sink-vortex":
+        v = sink_vortex(pos, goal, nb, on, lam_sink=prm["lam_sink"], k_vor=prm["k_vor"])
+    else:
+        psi = float(prm["heading"])
+        vel = ca.DM([prm["speed"] * math.cos(psi), prm["speed"] * math.sin(psi)])
+        v = modified_vortex(pos, psi, vel, goal, nb, nb_vel, on, lam_sink=prm["lam_sink"], k_vor0=prm["k_vor0"],
+                            r_safe=prm["r_safe"], r_tol=prm["r_tol"], gamma_max=prm["gamma_max"],
+                            smooth=prm["smooth"])
+    return ca.Function(f"scene_{field.replace('-', '_')}", [pos], [v], ["pos"], ["v"])
+
+
+def _solve(F: ca.Function, guess, tol: float = 1e-10):
+    z = ca.SX.sym("z", 2)
+    rf = ca.rootfinder("stagnation", "newton", ca.Function("residual", [z], [F(z)]),
+                       {"abstol": 1e-12, "max_iter": 100, "error_on_fail": False})
+    sol = np.array(rf(ca.DM(np.asarray(guess, float)))).ravel()
+    if not np.all(np.isfinite(sol)):
+        return None
+    scale = float(np.linalg.norm(np.array(F(ca.DM(np.asarray(guess, float)))))) or 1.0
+    return sol if float(np.linalg.norm(np.array(F(sol)))) <= max(tol * scale, 1e-10) else None
+
+
+def stagnation_points(F: ca.Function, box, *, starts: int = 20, exclude=(), min_gap: float = 0.05) -> np.ndarray:
+    """Every stagnation point of ``F`` in ``box`` that Newton (CasADi's ``rootfinder``) reaches from a
+    ``starts`` × ``starts`` grid of initial guesses, without repeats.
+
+    Parameters
+    ----------
+    F : casadi.Function
+        ``pos -> V(pos)`` (:func:`scene_function`, :func:`field_function`).
+    box : (float, float, float, float)
+        ``(x_min, x_max, y_min, y_max)`` (L): where guesses start and roots are kept.
+    starts : int
+        Guesses per axis.
+    exclude : sequence of ((float, float), float)
+        Discs ``(centre, radius)`` whose roots are dropped (the singular centres of sinks and vortices).
+    min_gap : float
+        Roots closer than this (L) are one.
+
+    Returns
+    -------
+    numpy.ndarray (k, 2)
+        The points, sorted by x then y.
+    """
+    x0, x1, y0, y1 = box
+    found: list[np.ndarray] = []
+    for gx in np.linspace(x0, x1, starts):
+        for gy in np.linspace(y0, y1, starts):
+            p = _solve(F, (gx, gy))
+            if p is None or not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
+                continue
+            if any(np.hypot(*(p - np.asarray(c, float))) < r for c, r in exclude):
+                continue
+            if all(np.hypot(*(p - q)) >= min_gap for q in found):
+                found.append(p)
+    return np.array(sorted(found, key=lambda p: (round(p[0], 6), round(p[1], 6)))).reshape(-1, 2)
+
+
+def classify(F: ca.Function, point) -> tuple[np.ndarray, str]:
+    """The eigenvalues of the field's Jacobian ∂V/∂pos at a stagnation point (CasADi's exact Jacobian) and the kind
+    of point they make for a ship steered along V: ``"saddle"`` (real, opposite signs: ships are turned aside, one
+    direction leads in), ``"stable node"`` / ``"unstable node"`` (real, both negative / positive: a trap / a
+    source), ``"stable focus"`` / ``"unstable focus"`` / ``"centre"`` (complex).
+
+    Parameters
+    ----------
+    F : casadi.Function
+        ``pos -> V(pos)``.
+    point : (float, float)
+        A stagnation point (L).
+
+    Returns
+    -------
+    eigenvalues : numpy.ndarray (2,)
+        Eigenvalues of the Jacobian (1/(L/U)), complex.
+    kind : str
+        The kind of point.
+
+    Examples
+    --------
+    >>> F = field_function("sink-vortex")
+    >>> classify(F, stagnation_point("sink-vortex", guess=(-10, -2)))[1]
+    'saddle'
+    """
+    z = ca.SX.sym("z", 2)
+    J = ca.Function("J", [z], [ca.jacobian(F(z), z)])
+    ev = np.linalg.eigvals(np.array(J(np.asarray(point, float))))
+    re, im = ev.real, ev.imag
+    if np.max(np.abs(im)) > 1e-9 * max(1.0, np.max(np.abs(ev))):
+        kind = "centre" if abs(re[0]) < 1e-12 else ("stable focus" if re[0] < 0 else "unstable focus")
+    elif re[0] * re[1] < 0:
+        kind = "saddle"
+    else:
+        kind = "stable node" if re.max() < 0 else "unstable node"
+    return ev, kind
+
+
+def grid_stagnation_cells(F: ca.Function, box, *, n: int = 400, exclude=(), jumps: bool = False) -> np.ndarray:
+    """Brute force: the cells of an ``n`` × ``n`` grid over ``box`` in which both components of the field change
+    sign, neighbouring cells merged, kept where a 41 × 41 sampling of the group's cells (and one cell around) comes
+    within 5 % of its largest ``|V|`` of zero (a stagnation point), or, with ``jumps``, where it does not (the field
+    jumps across zero at a switch, as the modified vortex's does, without vanishing).
+
+    Parameters
+    ----------
+    F : casadi.Function
+        ``pos -> V(pos)``.
+    box : (float, float, float, float)
+        ``(x_min, x_max, y_min, y_max)`` (L).
+    n : int
+        Grid points per axis.
+    exclude : sequence of ((float, float), float)
+        Discs ``(centre, radius)`` left out (singular centres).
+    jumps : bool
+        Return the sign changes without a zero (jumps) instead of the stagnation points.
+
+    Returns
+    -------
+    numpy.ndarray (k, 2)
+        One point per group of neighbouring cells (the sample point of least ``|V|``), sorted by x then y.
+    """
+    x0, x1, y0, y1 = box
+    xs, ys = np.linspace(x0, x1, n), np.linspace(y0, y1, n)
+    X, Y = np.meshgrid(xs, ys)
+    V = np.array(F.map(X.size)(np.vstack([X.ravel(), Y.ravel()])))
+    U, W = V[0].reshape(X.shape), V[1].reshape(X.shape)
+
+    def changes(A):
+        c = np.stack([A[:-1, :-1], A[1:, :-1], A[:-1, 1:], A[1:, 1:]])
+        return (c.max(axis=0) >= 0) & (c.min(axis=0) <= 0)
+    cells = changes(U) & changes(W)
+    cx, cy = (X[:-1, :-1] + X[1:, 1:]) / 2, (Y[:-1, :-1] + Y[1:, 1:]) / 2
+    pts = [np.array([a, b]) for a, b in zip(cx[cells], cy[cells])
+           if not any(np.hypot(a - c[0], b - c[1]) < r for c, r in exclude)]
+    groups: list[list[np.ndarray]] = []
+    step = 3.0 * np.hypot(xs[1] - xs[0], ys[1] - ys[0])
+    for p in pts:
+        for g in groups:
+            if min(np.hypot(*(p - q)) for q in g) <= step:
+                g.append(p)
+                break
+        else:
+            groups.append([p])
+    hx, hy = xs[1] - xs[0], ys[1] - ys[0]
+    out = []
+    for g in groups:
+        g = np.array(g)
+        sx = np.linspace(g[:, 0].min() - hx, g[:, 0].max() + hx, 41)
+        sy = np.linspace(g[:, 1].min() - hy, g[:, 1].max() + hy, 41)
+        SX, SY = np.meshgrid(sx, sy)
+        S = np.array(F.map(SX.size)(np.vstack([SX.ravel(), SY.ravel()])))
+        speed = np.hypot(S[0], S[1])
+        k = int(np.argmin(speed))
+        if (speed[k] <= 0.05 * speed.max()) != jumps:
+            out.append(np.array([SX.ravel()[k], SY.ravel()[k]]))
+    return np.array(sorted(out, key=lambda p: (round(p[0], 6), round(p[1], 6)))).reshape(-1, 2)

@@ -5,7 +5,8 @@ On ``builder-inited`` it writes into ``docs/_generated/`` (not in git):
 * ``parameters.md`` — the parameter table, :func:`mmg_casadi.params.markdown_table`;
 * ``flat_api.rst`` — a table of ``mmg_casadi.__all__`` pointing at the modules that define the names;
 * ``claims.md`` — ``docs/claims.md`` when it exists, else a placeholder;
-* ``gallery.md`` and ``gallery/<script>/*.png`` — every script in ``docs/gallery/`` run in its own process
+* ``results_<block>.md`` — the tables of the results file ``docs/results/current.toml`` (:mod:`studies.results`);
+* ``gallery.md`` and ``gallery/<script>/*.png`` (and ``*.gif``) — every script in ``docs/gallery/`` run in its own process
   (``python SCRIPT OUT_DIR``), its figures embedded under its docstring;
 
 and copies ``notebooks/*.ipynb`` into ``docs/notebooks/`` so that myst-nb executes them. A gallery script that
@@ -133,10 +134,15 @@ def _script_doc(script: Path) -> tuple[str, str]:
     return title.strip(), body.strip()
 
 
+def _figures(out: Path) -> list[Path]:
+    """The figures (PNG) and animations (GIF) a gallery script wrote, in name order."""
+    return sorted([*out.glob("*.png"), *out.glob("*.gif")])
+
+
 def _run_script(script: Path, out: Path, stamp: str) -> tuple[Path, float, str | None]:
     """Run ``script`` into ``out`` unless the stamp says its figures are current; returns (script, seconds, error)."""
     done = out / ".stamp"
-    if done.exists() and done.read_text() == stamp and any(out.glob("*.png")):
+    if done.exists() and done.read_text() == stamp and _figures(out):
         return script, 0.0, None
     shutil.rmtree(out, ignore_errors=True)
     out.mkdir(parents=True)
@@ -147,8 +153,8 @@ def _run_script(script: Path, out: Path, stamp: str) -> tuple[Path, float, str |
     seconds = time.perf_counter() - t0
     if proc.returncode != 0:
         return script, seconds, (proc.stderr or proc.stdout)[-3000:]
-    if not any(out.glob("*.png")):
-        return script, seconds, "wrote no PNG into its output directory"
+    if not _figures(out):
+        return script, seconds, "wrote no PNG or GIF into its output directory"
     done.write_text(stamp)
     return script, seconds, None
 
@@ -171,9 +177,10 @@ def build_gallery(workers: int) -> None:
             logger.info("gallery: %s ran in %.1f s", script.name, seconds)
         title, body = _script_doc(script)
         parts = [f"## {title}", "", body, ""]
-        for png in sorted(out.glob("*.png")):
+        for png in _figures(out):
             rel = png.relative_to(DOCS).as_posix()
-            parts += [f":::{{figure}} /{rel}", ":width: 100%", "", f"`{png.name}` (short run)", ":::", ""]
+            what = "animation" if png.suffix == ".gif" else "short run"
+            parts += [f":::{{figure}} /{rel}", ":width: 100%", "", f"`{png.name}` ({what})", ":::", ""]
         parts += [f"Short-run script: `docs/gallery/{script.name}`", ""]
         sections.append("\n".join(parts))
     _write(GENERATED / "gallery.md", "\n".join(sections))
@@ -591,6 +598,15 @@ def write_result_figures() -> None:
         plot_sweep(rows, param, out)
 
 
+def write_results() -> None:
+    """Every table of the one results file (``docs/results/current.toml``) rendered as the README renders it, into
+    ``_generated/results_<block>.md`` for the {include} directives of ``results.md``."""
+    from studies.results import BLOCKS, load
+    data = load()
+    for name, render in BLOCKS.items():
+        _write(GENERATED / f"results_{name}.md", render(data))
+
+
 def inspect_doc(obj) -> str:
     import inspect
     return inspect.getdoc(obj) or ""
@@ -638,6 +654,7 @@ def generate(app) -> None:
     write_metrics_schema()
     write_scoring_profiles()
     write_result_figures()
+    write_results()
     copy_notebooks()
     build_gallery(app.config.mmg_gallery_workers)
 

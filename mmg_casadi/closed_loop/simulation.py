@@ -43,10 +43,28 @@ def rollout_functions(layout: Layout) -> list[ca.Function]:
     return [build_closed_loop_step(layout, sparse=sparse), build_guidance(layout, sparse=sparse)]
 
 
+def describe(layout: Layout) -> str:
+    """What a rollout of ``layout`` compiles, in words (the notice of :data:`mmg_casadi.compiled.NOTICES`).
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout.
+
+    Returns
+    -------
+    str
+        For example ``"closed loop for 3 ships (modified-vortex)"``.
+    """
+    n = layout.n_ships
+    kind = "fleet step" if layout.neighbours else "closed loop"
+    return f"{kind} for {n} ship{'s' if n != 1 else ''} ({', '.join(dict.fromkeys(layout.methods))})"
+
+
 @lru_cache(maxsize=64)
 def _library(layout: Layout) -> tuple[ca.Function, ...]:
     step, *also = rollout_functions(layout)
-    compiled = compile_function(step, also=also)
+    compiled = compile_function(step, also=also, label=describe(layout))
     return tuple(compiled) if also else (compiled,)
 
 

@@ -25,10 +25,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mmg_casadi.colregs.geometry import wrap_to_pi
+import math
+
+from mmg_casadi.colregs.geometry import bearing, wrap_to_pi
 from mmg_casadi.colregs.kinematics import ground_velocity, pair_geometry
 from mmg_casadi.colregs.risk import RiskEpisode, first_trigger, release_range, risk_episodes, risk_of_collision
-from mmg_casadi.colregs.roles import classify_roles, head_on_sector
+from mmg_casadi.colregs.roles import classify_role, head_on_scalar
 from mmg_casadi.colregs.score import cpa_tcpa
 
 #: a counterfactual CPA must be this much smaller (L) for a pre-onset change to count as an avoiding manoeuvre
@@ -174,13 +176,27 @@ def baselines(t, onset, run_start, pos, vel, pos_other, vel_other, t_lookback) -
     """
     t = np.asarray(t, dtype=float)
     look = max(int(np.searchsorted(t, t[onset] - t_lookback - 1e-9)), run_start)
-    rel = np.asarray(pos_other, dtype=float)[onset] - np.asarray(pos, dtype=float)[onset]
-    vel, vel_other = np.asarray(vel, dtype=float), np.asarray(vel_other, dtype=float)
-    now = float(cpa_tcpa(rel, vel_other[onset] - vel[onset])[0])
-    own_before = float(cpa_tcpa(rel, vel_other[onset] - vel[look])[0])
-    other_before = float(cpa_tcpa(rel, vel_other[look] - vel[onset])[0])
+    rx, ry = (float(pos_other[onset][k]) - float(pos[onset][k]) for k in (0, 1))
+    v, vo, v_look, vo_look = (tuple(float(x) for x in a[k]) for a, k in ((vel, onset), (vel_other, onset),
+                                                                         (vel, look), (vel_other, look)))
+    now = _cpa(rx, ry, vo[0] - v[0], vo[1] - v[1])
+    own_before = _cpa(rx, ry, vo[0] - v_look[0], vo[1] - v_look[1])
+    other_before = _cpa(rx, ry, vo_look[0] - v[0], vo_look[1] - v[1])
     return (look if own_before < now - CPA_TOLERANCE else onset,
             look if other_before < now - CPA_TOLERANCE else onset)
+
+
+def _cpa(rx: float, ry: float, vx: float, vy: float) -> float:
+    """:func:`~mmg_casadi.colregs.score.cpa_tcpa`'s CPA of one relative position and velocity, in scalar
+    arithmetic with the same operations (the same result to the bit)."""
+    vv = vx * vx + vy * vy
+    ahead = 0.0
+    if vv > 1e-12:
+        tcpa = -(rx * vx + ry * vy) / vv
+        if math.isfinite(tcpa) and tcpa > 0.0:
+            ahead = tcpa
+    x, y = rx + vx * ahead, ry + vy * ahead
+    return math.sqrt(x * x + y * y)
 
 
 def timing(t, geometry, risk, episode, psi_other, speed_other, base_other, profile) -> dict:
@@ -340,14 +356,12 @@ def encounter_context(t, own, other, geometry, risk, episode, run_start, end, pr
     k0 = episode.onset
     base, base_other = baselines(t, k0, run_start, own["pos"], own["vel"], other["pos"], other["vel"],
                                  profile.t_lookback)
-    beta = pair_geometry(own["pos"][k0], own["psi"][base], other["pos"][k0], other["psi"][k0], own["vel"][k0],
-                         other["vel"][k0]).beta
-    alpha = pair_geometry(other["pos"][k0], other["psi"][base_other], own["pos"][k0], own["psi"][k0],
-                          other["vel"][k0], own["vel"][k0]).beta
-    role = str(classify_roles(beta, alpha, own["psi"][base], other["psi"][base_other], own["speed"][base],
-                              other["speed"][base_other], profile))
-    doubt = role == "head-on" and not bool(head_on_sector(beta, alpha, own["psi"][base], other["psi"][base_other],
-                                                          profile))
+    psi_own, psi_other = float(own["psi"][base]), float(other["psi"][base_other])
+    beta = bearing(own["pos"][k0], psi_own, other["pos"][k0])
+    alpha = bearing(other["pos"][k0], psi_other, own["pos"][k0])
+    role = classify_role(beta, alpha, psi_own, psi_other, float(own["speed"][base]),
+                         float(other["speed"][base_other]), profile)
+    doubt = role == "head-on" and not head_on_scalar(beta, alpha, psi_own, psi_other, profile, doubt=False)
     before = np.flatnonzero(own["active"][:k0 + 1])
     g = geometry
     times = timing(t, g, risk, episode, other["psi"], other["speed"], base_other, profile)

@@ -33,6 +33,8 @@ def wrap_to_pi(angle):
     >>> round(wrap_to_pi(3 * math.pi / 2), 6), round(wrap_to_pi(-0.5), 6)
     (-1.570796, -0.5)
     """
+    if isinstance(angle, float):  # a plain number: the same arithmetic without numpy's overhead
+        return (angle + math.pi) % TWO_PI - math.pi
     wrapped = (np.asarray(angle, dtype=float) + math.pi) % TWO_PI - math.pi
     return float(wrapped) if wrapped.ndim == 0 else wrapped
 

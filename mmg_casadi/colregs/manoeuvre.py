@@ -12,6 +12,7 @@ she crossed the other ship's course line (numpy, vectorised over the samples of 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,27 +49,27 @@ class Manoeuvre:
     speed_increase: np.ndarray
     action: int | None
 
-    @property
+    @functools.cached_property
     def starboard_deg(self) -> float:
         """Largest alteration to starboard (degrees, ≥ 0)."""
         return float(max(0.0, np.max(self.course_change, initial=0.0)))
 
-    @property
+    @functools.cached_property
     def port_deg(self) -> float:
         """Largest alteration to port (degrees, ≥ 0)."""
         return float(max(0.0, -np.min(self.course_change, initial=0.0)))
 
-    @property
+    @functools.cached_property
     def max_course_change_deg(self) -> float:
         """Largest alteration either way (degrees)."""
         return max(self.starboard_deg, self.port_deg)
 
-    @property
+    @functools.cached_property
     def max_speed_decrease(self) -> float:
         """Largest relative speed reduction."""
         return float(np.max(self.speed_decrease, initial=0.0))
 
-    @property
+    @functools.cached_property
     def max_speed_increase(self) -> float:
         """Largest relative speed increase."""
         return float(np.max(self.speed_increase, initial=0.0))

@@ -17,7 +17,7 @@ sign convention: angles positive to starboard.
   1 when each ship passes the other abeam on her port side;
 * :func:`stand_on_penalty`: the course change ramped from detectable to readily apparent (Hagen 2023, after
   Woerner et al.), the speed increase and decrease ramped between the speed thresholds the same way (ours);
-* :func:`pose_score` S_θ = γ_α·(1 − cos min(|α|, cut)) + γ_β·(1 − cos min(|β|, cut)) at the CPA (AIS_processing's
+* :func:`pose_score` ``S_θ = γ_α·(1 − cos min(|α|, cut)) + γ_β·(1 − cos min(|β|, cut))`` at the CPA (AIS_processing's
   terms, Hagen 2023's weights γ_α = 0.25, γ_β = 0.75, cut-off 90°): 1 when each ship passes abeam of or abaft the
   other's beam, 0 when both bows point at each other;
 * :func:`safety_score` S_safety = S_r + (1 − S_r)·S_θ (the form of github.com/marinehdk/colav-simulator's
@@ -49,6 +49,10 @@ def ramp(x, lo, hi):
     >>> ramp(np.array([1.0, 2.0, 3.0, 5.0]), 2.0, 4.0).tolist(), float(ramp(2.0, 2.0, 2.0))
     ([0.0, 0.0, 0.5, 1.0], 1.0)
     """
+    if isinstance(x, float):  # a plain number: the same arithmetic without numpy's overhead
+        if hi <= lo:
+            return np.float64(1.0 if x >= hi else 0.0)
+        return np.float64(min(max((x - lo) / (hi - lo), 0.0), 1.0))
     x = np.asarray(x, dtype=float)
     if hi <= lo:
         return (x >= hi).astype(float)

@@ -22,6 +22,8 @@ overtaking/overtaken): on a collision course β and α have opposite signs.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mmg_casadi.colregs.geometry import wrap_to_pi
@@ -150,3 +152,71 @@ def in_doubt(beta, alpha, psi_own, psi_other, profile) -> np.ndarray:
     limit = np.radians(profile.head_on_doubt_deg)
     return np.broadcast_to((np.abs(np.asarray(beta, dtype=float)) < limit)
                            & (np.abs(np.asarray(alpha, dtype=float)) < limit), shape)
+
+
+def classify_role(beta: float, alpha: float, psi_own: float, psi_other: float, speed_own: float, speed_other: float,
+                  profile) -> str:
+    """:func:`classify_roles` of one encounter, in scalar arithmetic (the scorer's classification at an onset).
+
+    Parameters
+    ----------
+    beta, alpha : float
+        Bearing of the other ship from the own bow and contact angle (rad).
+    psi_own, psi_other : float
+        Headings (rad).
+    speed_own, speed_other : float
+        Speeds over the ground.
+    profile : ScoringProfile
+        The sectors.
+
+    Returns
+    -------
+    str
+        A name of :data:`ROLES`, the same as :func:`classify_roles` gives.
+
+    Examples
+    --------
+    >>> from mmg_casadi.colregs.profiles import iitm_lab
+    >>> classify_role(math.radians(45), math.radians(-45), 0.0, math.radians(-90), 1.0, 1.0, iitm_lab())
+    'give-way'
+    """
+    stern = math.radians(profile.stern_deg)
+    bow = math.inf if profile.overtaking_bow_deg is None else math.radians(profile.overtaking_bow_deg)
+    if abs(alpha) > stern and speed_own > speed_other and abs(beta) < bow:
+        return "overtaking"
+    if abs(beta) > stern and speed_own < speed_other and abs(alpha) < bow:
+        return "overtaken"
+    if head_on_scalar(beta, alpha, psi_own, psi_other, profile):
+        return "head-on"
+    return "give-way" if beta > 0.0 else "stand-on"
+
+
+def head_on_scalar(beta: float, alpha: float, psi_own: float, psi_other: float, profile, *, doubt: bool = True) -> bool:
+    """:func:`head_on_sector` (or, with ``doubt``, that or :func:`in_doubt`) of one encounter, in scalar
+    arithmetic.
+
+    Parameters
+    ----------
+    beta, alpha : float
+        Bearing of the other ship from the own bow and contact angle (rad).
+    psi_own, psi_other : float
+        Headings (rad).
+    profile : ScoringProfile
+        ``head_on_deg``, ``head_on_heading_deg`` and ``head_on_doubt_deg``.
+    doubt : bool, default True
+        Include Rule 14(c)'s doubt band.
+
+    Returns
+    -------
+    bool
+        Whether the ships meet head-on.
+    """
+    limit = math.radians(profile.head_on_deg)
+    out = abs(alpha) < limit and abs(beta) < limit
+    if out and profile.head_on_heading_deg is not None:
+        reciprocal = abs(wrap_to_pi(psi_own - psi_other - math.pi))
+        out = reciprocal < math.radians(profile.head_on_heading_deg)
+    if not out and doubt and profile.head_on_doubt_deg is not None:
+        wide = math.radians(profile.head_on_doubt_deg)
+        out = abs(beta) < wide and abs(alpha) < wide
+    return out

@@ -24,6 +24,7 @@ Thresholds: a :class:`~mmg_casadi.colregs.profiles.ScoringProfile` (``published`
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -115,12 +116,12 @@ class Encounter:
     unfinished: bool = False
     excuse_changed: bool = False
 
-    @property
+    @functools.cached_property
     def score(self) -> float | None:
         """Mean of the applicable rules' scores (``None`` if none applies)."""
         return float(np.mean([r.score for r in self.rules.values()])) if self.rules else None
 
-    @property
+    @functools.cached_property
     def compliant(self) -> bool | None:
         """Whether every applicable rule is kept (``None`` if none applies)."""
         return all(r.verdict for r in self.rules.values()) if self.rules else None
@@ -328,10 +329,53 @@ def score_encounters(t, pos, psi, speed=None, active=None, profile=None, *, name
     >>> score_encounters(t, pos, psi, profile="iitm-lab")[0].onset["t"]
     14.5
     """
-    profile = scoring_profile(profile)
+    return score_prepared(prepare(t, pos, psi, speed, active, own=own), profile, names=names)
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """What every profile's scoring of one trajectory shares (:func:`prepare`): the validated arrays, the ships'
+    series and the relative geometry of every scored ordered pair.
+
+    Parameters
+    ----------
+    t : numpy.ndarray (T,)
+        Sample times.
+    psi, speed, active : numpy.ndarray (T, N)
+        Headings, speeds over the ground and sailing flags.
+    ships : list of dict
+        Per ship ``pos``, ``psi``, ``vel``, ``speed``, ``active``.
+    rows : list of int
+        The own ships scored.
+    geometry : PairGeometry
+        Arrays ``(T, len(rows), N)``.
+    """
+
+    t: np.ndarray
+    psi: np.ndarray
+    speed: np.ndarray
+    active: np.ndarray
+    ships: list
+    rows: list
+    geometry: PairGeometry
+
+
+def prepare(t, pos, psi, speed=None, active=None, *, own=None) -> Prepared:
+    """The profile-independent part of :func:`score_encounters` (velocities over the ground, the pairs' geometry),
+    computed once for scoring one trajectory under several profiles (:func:`score_prepared`).
+
+    Parameters
+    ----------
+    t, pos, psi, speed, active, own
+        As :func:`score_encounters`.
+
+    Returns
+    -------
+    Prepared
+        The arrays every profile's scoring reads.
+    """
     t, pos, psi, vel, speed, active = _as_arrays(t, pos, psi, speed, active)
     n = pos.shape[1]
-    names = [f"ship{i}" for i in range(n)] if names is None else [str(x) for x in names]
     rows = list(range(n)) if own is None else [int(i) for i in np.atleast_1d(own)]
     if any(not 0 <= i < n for i in rows):
         raise ValueError(f"own: expected ship indices in [0, {n}), got {own}")
@@ -339,15 +383,50 @@ def score_encounters(t, pos, psi, speed=None, active=None, profile=None, *, name
                       vel[:, rows, None, :], vel[:, None, :, :])
     ships = [{"pos": pos[:, i], "psi": psi[:, i], "vel": vel[:, i], "speed": speed[:, i], "active": active[:, i]}
              for i in range(n)]
+    return Prepared(t, psi, speed, active, ships, rows, g)
+
+
+def score_prepared(prep: Prepared, profile=None, *, names=None, applicable_only: bool = False) -> list[Encounter]:
+    """:func:`score_encounters` of a trajectory from :func:`prepare` under ``profile``.
+
+    Parameters
+    ----------
+    prep : Prepared
+        The trajectory's shared arrays.
+    profile : ScoringProfile or str, optional
+        Thresholds or a profile name (default ``"published"``).
+    names : sequence of str, optional
+        Ship names (default ``ship0``, ``ship1``, ...).
+    applicable_only : bool, default False
+        Leave out the pairs without a risk of collision (they carry no verdict).
+
+    Returns
+    -------
+    list of Encounter
+        Ordered by own ship, other ship and onset.
+    """
+    profile = scoring_profile(profile)
+    t, psi, speed, active, ships, g = prep.t, prep.psi, prep.speed, prep.active, prep.ships, prep.geometry
+    n = len(ships)
+    names = [f"ship{i}" for i in range(n)] if names is None else [str(x) for x in names]
     out = []
-    for row, i in enumerate(rows):
+    # the Rule 7 gate of every scored pair at once; a pair without a single sample of risk has no encounter
+    sailing = active[:, prep.rows, None] & active[:, None, :]
+    gate = risk_of_collision(g.cpa, g.tcpa, g.range, sailing, profile)
+    any_risk = gate.any(axis=0)
+    for row, i in enumerate(prep.rows):
         contexts, plain = [], []
         for j in (j for j in range(n) if j != i):
-            both = active[:, i] & active[:, j]
+            both = sailing[:, row, j]
+            if not any_risk[row, j]:
+                if not applicable_only:
+                    plain.append(Encounter(i, j, names[i], names[j], profile.name, False, quantities=json_value({
+                        "min_range": float(np.min(g.range[both, row, j])) if both.any() else None})))
+                continue
             gij = PairGeometry(*(getattr(g, f)[:, row, j] for f in ("range", "beta", "alpha", "cpa", "tcpa")))
-            risk = risk_of_collision(gij.cpa, gij.tcpa, gij.range, both, profile)
+            risk = gate[:, row, j]
             episodes = risk_episodes(gij.range, gij.tcpa, risk, both, release_range(profile))
-            if not episodes:
+            if not episodes and not applicable_only:
                 plain.append(Encounter(i, j, names[i], names[j], profile.name, False, quantities=json_value({
                     "min_range": float(np.min(gij.range[both])) if both.any() else None})))
             last = int(np.flatnonzero(both)[-1]) if both.any() else 0
@@ -386,6 +465,6 @@ def score_encounters(t, pos, psi, speed=None, active=None, profile=None, *, name
             out.append(Encounter(i, j, names[i], names[j], profile.name, True,
                                  ENCOUNTER_OF_ROLE[c.role], c.role, json_value(onset), json_value(release),
                                  json_value(closest), rules, tuple(names[x] for x in clash[k]),
-                                 json_value(_quantities(c)), cut, changed))
+                                 _quantities(c), cut, changed))
         out.extend(plain)
     return sorted(out, key=lambda e: (e.own, e.other, -1.0 if e.onset is None else e.onset["t"]))

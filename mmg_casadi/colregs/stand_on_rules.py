@@ -108,7 +108,7 @@ def stand_on_rules(ctx, excused) -> dict:
     stop = e.cpa + 1 if free is None else free
     held = window < stop
     out = {}
-    excused_time = float(np.sum(np.gradient(ctx.t)[span][~counted]))
+    excused_time = float(np.sum(np.gradient(ctx.t)[span][~counted])) if not counted.all() else 0.0
     if held.any():
         course = float(np.max(np.abs(m.course_change[held])))
         up, down = float(np.max(m.speed_increase[held])), float(np.max(m.speed_decrease[held]))

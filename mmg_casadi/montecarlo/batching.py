@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mmg_casadi.compiled import library_path
+from mmg_casadi.compiled import NOTICES, library_path
 from mmg_casadi.closed_loop.simulation import compiled_step, rollout_functions
 from mmg_casadi.errors import InputError, RunError
 from mmg_casadi.guidance.plugins import ensure
@@ -143,6 +143,7 @@ def plan_batches(envs, methods, runs: int, *, done=frozenset(), base_seed: int =
 
 
 def _compile_item(layout) -> float:
+    NOTICES["stream"] = None  # a forked compiler process: prepare_layouts reports for it
     t0 = time.perf_counter()
     compiled_step(layout)
     return time.perf_counter() - t0

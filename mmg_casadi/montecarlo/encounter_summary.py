@@ -4,8 +4,8 @@ role and by rule with Wilson intervals, and paired comparisons of methods encoun
 Each run stores its own ship's encounters with a risk of collision in one text cell (:func:`format_verdicts`),
 e.g. ``2:give-way:0.731:8=1/16=0/15=1;4:stand-on:1:17a_i=1/8=1:e``: per encounter the other ship's index, the own
 ship's role at the onset of risk, the graded score, each applicable rule's verdict (1 kept, 0 not) and, as a fifth
-field ``e``, whether an excuse by a give-way duty to another ship changed a verdict
-(:attr:`~mmg_casadi.colregs.scorer.Encounter.excuse_changed`). A study keeps one such cell per scoring profile
+field ``e``, whether an excuse by a give-way duty to another ship changed a verdict (``excuse_changed`` of
+:class:`~mmg_casadi.colregs.scorer.Encounter`). A study keeps one such cell per scoring profile
 (``colregs_verdicts_<profile>``, :data:`~mmg_casadi.montecarlo.execution.PROFILE_COLUMNS`).
 
 :func:`summarize_encounters` reduces the cells to one row per (environment, method, group) where the group is

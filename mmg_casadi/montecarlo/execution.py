@@ -36,8 +36,9 @@ Outcome of a run (own ship = agent 0, judged from the final state):
     flag (every risky encounter kept; empty without one) and each encounter's role, score and rule verdicts
     (:func:`format_verdicts`); see :func:`own_ship_encounters`.
 ``colregs_verdicts_published``, ``colregs_verdicts_iitm_lab``, ``colregs_verdicts_ntnu_2023``
-    the same encounters' verdicts under every scoring profile (:data:`PROFILE_COLUMNS`), so that a study reports
-    all three side by side whichever is its headline (``colregs_profile``).
+    the same encounters' verdicts under each scoring profile (:data:`PROFILE_COLUMNS`): the headline
+    (``colregs_profile``) always, every profile with ``colregs_all_profiles``, so that a study reports them side by
+    side; empty for a profile not scored.
 ``colregs_rule9``
     the own ship's COLREG Rule 9(a) score in a narrow channel (:func:`mmg_casadi.colregs.narrow_channel.rule9`
     on the same history): the share of her time in a narrow channel spent on the starboard side of its centre
@@ -72,7 +73,7 @@ from mmg_casadi.closed_loop.problem import ClosedLoopModel, build_problem
 from mmg_casadi.closed_loop.state import tallies
 from mmg_casadi.colregs.narrow_channel import rule9
 from mmg_casadi.colregs.profiles import SCORING_PROFILES, scoring_profile
-from mmg_casadi.colregs.scorer import score_encounters
+from mmg_casadi.colregs.scorer import prepare, score_prepared
 from mmg_casadi.guidance.methods import forget_on_unregister
 from mmg_casadi.montecarlo.encounter_summary import format_verdicts
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
@@ -234,25 +235,30 @@ PROFILE_COLUMNS: dict[str, str] = {name: f"colregs_verdicts_{name.replace('-', '
 """Column of ``runs.csv`` holding each scoring profile's ``colregs_verdicts``."""
 
 
-def profile_columns(headline: str) -> dict[str, str]:
-    """:data:`PROFILE_COLUMNS` with the study's headline profile first.
+def profile_columns(params: dict) -> dict[str, str]:
+    """The :data:`PROFILE_COLUMNS` a study with the resolved ``params`` fills: its ``colregs_profile`` first, then,
+    with ``colregs_all_profiles``, the others in registry order.
 
     Parameters
     ----------
-    headline : str
-        The study's ``colregs_profile``.
+    params : dict
+        The study's resolved parameters.
 
     Returns
     -------
     dict
-        ``{profile: column}``, ``headline`` first, then the others in registry order.
+        ``{profile: column}``.
 
     Examples
     --------
-    >>> list(profile_columns("iitm-lab"))
+    >>> list(profile_columns({"colregs_profile": "iitm-lab", "colregs_all_profiles": True}))
     ['iitm-lab', 'published', 'ntnu-2023']
+    >>> list(profile_columns({"colregs_profile": "iitm-lab", "colregs_all_profiles": False}))
+    ['iitm-lab']
     """
-    return {headline: PROFILE_COLUMNS[headline], **{n: c for n, c in PROFILE_COLUMNS.items() if n != headline}}
+    headline = params["colregs_profile"]
+    others = {n: c for n, c in PROFILE_COLUMNS.items() if n != headline} if params["colregs_all_profiles"] else {}
+    return {headline: PROFILE_COLUMNS[headline], **others}
 
 
 def own_ship_encounters(t, states, profile=None, *, alternatives=()) -> dict:
@@ -306,26 +312,23 @@ def own_ship_encounters(t, states, profile=None, *, alternatives=()) -> dict:
     both = mask[:, :1] & mask[:, 1:]
     speed = (np.max(np.linalg.norm(np.diff(states[:, :, :2], axis=0), axis=2) / np.diff(t)[:, None])
              if t.size > 1 else 0.0)
-    scored = {}  # profile -> (risky encounters, ship indices scored)
-    for p in (scoring_profile(profile), *(scoring_profile(n) for n in alternatives)):
-        if p in scored:
-            continue
-        # a ship that never comes within the risk gate's reach has no risk of collision and no duty
-        reach = min(p.r_risk, p.d_risk + 2.0 * speed * p.t_risk) if math.isfinite(p.t_risk) else p.r_risk
-        near = np.any((dist <= reach) & both, axis=0)
-        ships = [0, *(1 + np.flatnonzero(near))]
-        risky = []
-        if len(ships) > 1 and t.size > 1:  # one sample has no velocity, hence no risk of collision
-            risky = [e for e in score_encounters(t, states[:, ships, :2], states[:, ships, 2],
-                                                 active=mask[:, ships], profile=p, own=0) if e.judged]
-        scored[p] = (risky, ships)
-    risky, ships = scored[scoring_profile(profile)]
+    profiles = list(dict.fromkeys((scoring_profile(profile), *(scoring_profile(n) for n in alternatives))))
+    # a ship that never comes within a profile's risk gate's reach has no risk of collision and no duty under it
+    reach = max(min(p.r_risk, p.d_risk + 2.0 * speed * p.t_risk) if math.isfinite(p.t_risk) else p.r_risk
+                for p in profiles)
+    ships = [0, *(1 + np.flatnonzero(np.any((dist <= reach) & both, axis=0)))]
+    scored = {p: [] for p in profiles}  # profile -> its risky encounters
+    if len(ships) > 1 and t.size > 1:  # one sample has no velocity, hence no risk of collision
+        prep = prepare(t, states[:, ships, :2], states[:, ships, 2], active=mask[:, ships], own=0)
+        for p in profiles:
+            scored[p] = [e for e in score_prepared(prep, p, applicable_only=True) if e.judged]
+    risky = scored[scoring_profile(profile)]
     lawful = sum(1 for e in risky if e.compliant)
     return {"colregs_risky": len(risky), "colregs_lawful": lawful,
             "colregs_score": float(np.mean([e.score for e in risky])) if risky else math.nan,
             "colregs_compliant": lawful == len(risky) if risky else None,
             "colregs_verdicts": format_verdicts(risky, ships),
-            **{PROFILE_COLUMNS[n]: format_verdicts(*scored[scoring_profile(n)]) for n in alternatives}}
+            **{PROFILE_COLUMNS[n]: format_verdicts(scored[scoring_profile(n)], ships) for n in alternatives}}
 
 
 def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
@@ -376,8 +379,10 @@ def explain_run(scenario, model: ClosedLoopModel, x_final, t, states) -> dict:
                              collision_with=own["collision_with"], goals=goals, obstacles=obstacles,
                              positions_at_collision=at, turn_time=turn_time_90(float(P["delta_max_deg"])),
                              near_goal_distance=float(P["near_goal_distance"]), unavoidable=unavoidable)
-    return {"failure_mechanism": mech,
-            **own_ship_encounters(t, states, P["colregs_profile"], alternatives=tuple(SCORING_PROFILES)),
+    return {"failure_mechanism": mech, **dict.fromkeys(PROFILE_COLUMNS.values(), ""),  # "" for a profile not scored
+            **own_ship_encounters(t, states, P["colregs_profile"],
+                                  alternatives=tuple(SCORING_PROFILES) if P["colregs_all_profiles"] else
+                                  (P["colregs_profile"],)),
             "colregs_rule9": own_ship_rule9(scenario, t, states)}
 
 

@@ -1,9 +1,9 @@
 """Explain one run of a statistical study: re-run it exactly and show every encounter of its own ship, rule by rule.
 
 A study's ``study.json`` (its resolved parameters and disturbance ranges) and ``runs.csv`` (the seed of each run)
-fix a run completely: :func:`explain_run` samples the same scenario (:func:`~mmg_casadi.montecarlo.execution.
-sampled_scenario`), rolls it out through the same batch rollout as the study (:func:`~mmg_casadi.montecarlo.
-execution.run_batch`, a batch of one run) and recomputes its row. The COLREG verdicts of every profile are compared
+fix a run completely: :func:`explain_run` samples the same scenario
+(:func:`~mmg_casadi.montecarlo.execution.sampled_scenario`), rolls it out through the same batch rollout as the study
+(:func:`~mmg_casadi.montecarlo.execution.run_batch`, a batch of one run) and recomputes its row. The COLREG verdicts of every profile are compared
 with the stored row, cell by cell (:attr:`RunExplanation.reproduced`), and the own ship's encounters are scored again
 with their full detail (:class:`~mmg_casadi.colregs.scorer.Encounter`) for the figures of :func:`plot_encounter`:
 both tracks with time marks, the onset of risk, the closest point of approach, the role, each rule's verdict and
@@ -29,13 +29,15 @@ from mmg_casadi.colregs.scorer import Encounter, score_encounters
 from mmg_casadi.colregs.verdict import RULES
 from mmg_casadi.errors import InputError
 from mmg_casadi.montecarlo.disturbance_sampling import DisturbanceRanges
-from mmg_casadi.montecarlo.execution import DEFAULT_CHUNK, PROFILE_COLUMNS, _non_default, run_batch
+from mmg_casadi.montecarlo.execution import (DEFAULT_CHUNK, PROFILE_COLUMNS, _non_default, profile_columns,
+                                             run_batch)
 from mmg_casadi.montecarlo.results import ResultsTable
 from mmg_casadi.montecarlo.sampling import ALL_ENVIRONMENTS
 from mmg_casadi.params import resolve
 
 VERDICT_COLUMNS: tuple[str, ...] = ("colregs_verdicts", *PROFILE_COLUMNS.values())
-"""The cells of a run's row that :attr:`RunExplanation.reproduced` compares."""
+"""The cells of a run's row that :attr:`RunExplanation.reproduced` compares (those the study filled:
+:func:`~mmg_casadi.montecarlo.execution.profile_columns`)."""
 
 
 @dataclass
@@ -83,7 +85,8 @@ class RunExplanation:
         character for character (empty when the study has no row for the run)."""
         if self.stored is None:
             return {}
-        return {c: (self.row.get(c) or "") == (self.stored.get(c) or "") for c in VERDICT_COLUMNS}
+        columns = ("colregs_verdicts", *profile_columns(self.params).values())
+        return {c: (self.row.get(c) or "") == (self.stored.get(c) or "") for c in columns}
 
     def to_dict(self) -> dict:
         """JSON-ready summary: the run, whether it reproduces, its row and every encounter (``Encounter.to_dict``).

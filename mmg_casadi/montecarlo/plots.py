@@ -16,6 +16,7 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from mmg_casadi.errors import InputError
+from mmg_casadi.figstyle import PAGE, save, style
 from mmg_casadi.montecarlo.results import Summary
 
 PANELS: tuple[tuple[str, str, str, float], ...] = (
@@ -75,10 +76,15 @@ def plot_statistics(summary, path=None) -> Figure:
         raise InputError("summary", "a Summary or a list of summary rows", type(summary).__name__)
     if not rows:
         raise InputError("summary", "at least one (environment, method) row", "an empty summary")
+    with style():
+        return _plot(rows, path)
+
+
+def _plot(rows, path) -> Figure:
     methods = list(dict.fromkeys(r["method"] for r in rows))
     envs = sorted({int(r["environment"]) for r in rows})
-
-    fig = Figure(figsize=(11.0, 12.0), layout="constrained")
+    by_method = len(envs) == 1  # one environment: the methods along the abscissa, not a lone tick
+    fig = Figure(figsize=(PAGE, 1.05 * PAGE), layout="constrained")
     grid = fig.add_gridspec(3, 2)
     slots = [grid[0, 0], grid[1, 0], grid[1, 1], grid[2, 0], grid[2, 1], grid[0, 1]]
     width = 0.3
@@ -94,21 +100,30 @@ def plot_statistics(summary, path=None) -> Figure:
                 if r is None or r.get(mean_col) is None or not math.isfinite(r[mean_col]):
                     continue
                 y = scale * r[mean_col]
-                xs.append(env + offsets[i])
+                xs.append(i if by_method else env + offsets[i])
                 ys.append(y)
                 lo.append(_nan_to_zero(y - scale * r[low_col]))
                 hi.append(_nan_to_zero(scale * r[high_col] - y))
-            ax.errorbar(xs, ys, yerr=[lo, hi], marker=_MARKERS[i % len(_MARKERS)], linestyle="-", capsize=4,
-                        label=str(method))
+            ax.errorbar(xs, ys, yerr=[lo, hi], marker=_MARKERS[i % len(_MARKERS)], linestyle="-", capsize=2.5,
+                        ms=3.5, color=SERIES[i % len(SERIES)], label=str(method))
         ax.set_title(title)
-        ax.set_xlabel("Environment (1-5 the paper's, 6 a strait) [-]")
         ax.set_ylabel(ylabel)
-        ax.set_xticks(envs)
-        ax.grid(True, alpha=0.3)
-        if metric == "success":
+        if by_method:
+            ax.set_xticks(range(len(methods)), methods, rotation=20, ha="right")
+            ax.set_xlim(-0.6, len(methods) - 0.4)
+            ax.set_xlabel(f"method (environment {envs[0]})")
+        else:
+            ax.set_xticks(envs)
+            ax.set_xlabel("environment (1-5 the paper's, 6 a strait)")
+        ax.grid(True)
+        if metric == "success" and not by_method:
             ax.legend(loc="best")
     if path is not None:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=150)
+        save(fig, path)
     return fig
+
+
+SERIES = ("#000000", "#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#8C564B", "#7F7F7F")
+"""Colour of each method's series."""

@@ -288,15 +288,15 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
     from mmg_casadi.montecarlo.comparisons import compare_methods, to_markdown, write_csv  # scipy.stats: ~1 s
     comparisons = compare_methods(rows, methods)
     write_csv(comparisons, out / "comparisons.csv")
-    by_encounter = encounter_summary.summarize_profiles(rows, profile_columns(params["colregs_profile"]))
-    encounter_pairs = encounter_summary.compare_profiles(rows, profile_columns(params["colregs_profile"]), methods)
+    by_encounter = encounter_summary.summarize_profiles(rows, profile_columns(params))
+    encounter_pairs = encounter_summary.compare_profiles(rows, profile_columns(params), methods)
     encounter_summary.write_csv(by_encounter, out / "colregs.csv", encounter_summary.ENCOUNTER_COLUMNS)
     encounter_summary.write_csv(encounter_pairs, out / "colregs_comparisons.csv", encounter_summary.PAIR_COLUMNS)
     (out / "summary.md").write_text(
         summary.to_markdown() + "\n\n## Failure mechanisms (own ship; mmg_casadi.montecarlo.failures)\n\n"
         + summary.failures_markdown() + "\n\n## Paired comparisons (same runs; exact McNemar test)\n\n"
-        + to_markdown(comparisons) + "\n\n## COLREG encounters with a risk of collision (own ship; every scoring "
-        + f"profile, {params['colregs_profile']} first; mmg_casadi.montecarlo.encounter_summary)\n\n"
+        + to_markdown(comparisons) + "\n\n## COLREG encounters with a risk of collision (own ship; profile "
+        + ", ".join(profile_columns(params)) + "; mmg_casadi.montecarlo.encounter_summary)\n\n"
         + encounter_summary.to_markdown(by_encounter, encounter_pairs) + "\n", encoding="utf-8")
     from mmg_casadi.montecarlo.plots import plot_statistics  # matplotlib: imported only when a study is written
     plot_statistics(summary, out / "statistics.png")

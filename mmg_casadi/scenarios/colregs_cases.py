@@ -18,7 +18,7 @@ under every profile.
 Examples
 --------
 >>> sorted(CASES)[:3]
-['crossing_both_hold', 'crossing_give_way_early', 'crossing_give_way_late']
+['crossing_ahead', 'crossing_both_hold', 'crossing_give_way_early']
 >>> CASES["stand_on_drifts"].point
 'stand-on course keeping'
 """

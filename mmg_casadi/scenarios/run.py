@@ -145,7 +145,7 @@ class ScenarioResult:
         """
         return self.to_pandas()
 
-    def save(self, out, *, tracking: bool = False) -> Path:
+    def save(self, out, *, tracking: bool = False, units=None) -> Path:
         """Write the files ``simulate`` writes (``trajectory.npz``, ``trajectory.csv``, ``scenario.png``,
         ``metrics.json``) into directory ``out``; returns its path.
 
@@ -155,13 +155,15 @@ class ScenarioResult:
             Output directory (created).
         tracking : bool
             Draw the waypoint-tracking figure instead of the encounter figure.
+        units : mmg_casadi.units.Units or str, optional
+            Units of the figure: ``"nd"`` (default: L, L/U, U) or ``"si"`` (m, s, kn).
 
         Returns
         -------
         pathlib.Path
             The output directory.
         """
-        write_outputs(self, out, tracking=tracking)
+        write_outputs(self, out, tracking=tracking, units=units)
         return Path(out)
 
     def pair_distances(self) -> dict:
@@ -211,9 +213,9 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
     Parameters
     ----------
     scenario : Scenario, str or Path
-        A scenario, or the path of a scenario TOML file (:func:`~mmg_casadi.scenarios.scenario.load_scenario`); a file
-        name that does not exist but names a shipped scenario (``"head_on.toml"``) loads that one
-        (:func:`packaged_scenario`).
+        A scenario, or the path of a scenario TOML file (:func:`~mmg_casadi.scenarios.scenario.load_scenario`); a
+        name that is no file but names a shipped scenario (``"head_on"`` or ``"head_on.toml"``) loads that one
+        (:func:`packaged_scenario`), as ``mmg-casadi simulate head_on`` does.
     params : dict, optional
         Parameter overrides by name (:data:`mmg_casadi.params.PARAMETERS`); they win over the scenario's
         ``[settings]``. A parameter of a method none of the ships uses is refused
@@ -239,7 +241,7 @@ def run_scenario(scenario, params: dict | None = None, *, method: str | None = N
         sc = scenario
     else:
         path = Path(scenario)
-        shipped = path.suffix == ".toml" and path.parent == Path(".") and not path.exists()
+        shipped = path.suffix in (".toml", "") and path.parent == Path(".") and not path.exists()
         sc = packaged_scenario(path.stem) if shipped and path.stem in packaged_names() else load_scenario(path)
     if method is not None:
         sc = with_method(sc, method)
@@ -272,7 +274,7 @@ def _scenario_dir():
 def packaged_scenarios() -> list[dict]:
     """What ``mmg-casadi scenarios`` lists: per shipped scenario its ``name``, number of ``ships`` and of
     ``obstacles``, ``method`` (``settings.method``, followed by the ships that override it) and ``description``
-    (the first line of the file's header comment up to its first comma; ``""`` without one).
+    (the file's header comment up to its first comma, colon or full stop outside parentheses; ``""`` without one).
 
     Returns
     -------
@@ -290,12 +292,26 @@ def packaged_scenarios() -> list[dict]:
     for name in packaged_names():
         sc = packaged_scenario(name)
         own = [f"{s.name}: {s.method}" for s in sc.ships if s.method not in (None, sc.settings.method)]
-        head = _scenario_dir().joinpath(f"{name}.toml").read_text(encoding="utf-8").splitlines()
-        first = head[0].lstrip("#").strip() if head and head[0].startswith("#") else ""
+        text = _scenario_dir().joinpath(f"{name}.toml").read_text(encoding="utf-8")
         rows.append({"name": name, "ships": len(sc.ships), "obstacles": len(sc.obstacles),
                      "method": sc.settings.method + (f" ({', '.join(own)})" if own else ""),
-                     "description": first.split(", ")[0].rstrip(".")})
+                     "description": _first_clause(text)})
     return rows
+
+
+def _first_clause(text: str) -> str:
+    """The header comment of a scenario file up to its first comma, colon or full stop outside parentheses."""
+    head = []
+    for line in text.splitlines():
+        if not line.startswith("#"):
+            break
+        head.append(line.lstrip("#").strip())
+    words, depth = " ".join(head), 0
+    for k, ch in enumerate(words):
+        depth += (ch in "([") - (ch in ")]")
+        if depth == 0 and ch in ",:." and (k + 1 == len(words) or words[k + 1] == " "):
+            return words[:k]
+    return words
 
 
 def packaged_scenario(name: str) -> Scenario:
@@ -529,7 +545,8 @@ def _pairs(sc, traj: Trajectory, mask: np.ndarray, r_safe: float) -> tuple[list,
     return sorted((min(p), max(p)) for p in ships), sorted(obstacles)
 
 
-def write_outputs(res: ScenarioResult, out, *, figure_name: str = "scenario.png", tracking: bool = False) -> None:
+def write_outputs(res: ScenarioResult, out, *, figure_name: str = "scenario.png", tracking: bool = False,
+                  units=None) -> None:
     """Write ``trajectory.npz``, ``trajectory.csv``, ``metrics.json`` and the figure into ``out``, all or none:
     they are written into a hidden sibling folder first and moved into ``out`` at the end
     (:func:`~mmg_casadi.io.staged_directory`), so an interruption (Ctrl-C, SIGTERM) leaves no partial file.
@@ -544,11 +561,13 @@ def write_outputs(res: ScenarioResult, out, *, figure_name: str = "scenario.png"
         File name of the figure.
     tracking : bool
         Draw the waypoint-tracking figure instead of the encounter figure.
+    units : mmg_casadi.units.Units or str, optional
+        Units of the figure: ``"nd"`` (default) or ``"si"``.
     """
     from mmg_casadi.plotting import plot_fleet, plot_scenario, plot_tracking  # matplotlib: only when writing
     with staged_directory(out) as tmp:
         res.trajectory.to_npz(tmp / "trajectory.npz")
         res.trajectory.to_csv(tmp / "trajectory.csv", names=res.names())
         figure = plot_tracking if tracking else plot_fleet if res.trajectory.layout.neighbours else plot_scenario
-        figure(res, tmp / figure_name)
+        figure(res, tmp / figure_name, **({} if units is None else {"units": units}))
         write_json(tmp / "metrics.json", res.metrics)

@@ -98,7 +98,7 @@ def _speed_step(ship: ShipParams, steering: SteeringParams) -> ca.Function:
 
 
 def _roll(step: ca.Function, x0, p, n_steps: int):
-    return _run(compile_function(step).mapaccum(n_steps), x0, p)
+    return _run(compile_function(step, label=f"the manoeuvre ({step.name()})").mapaccum(n_steps), x0, p)
 
 
 def _run(F: ca.Function, x0, p):
@@ -165,7 +165,7 @@ def _last_moment_rollout(ship: ShipParams, steering: SteeringParams, n_steps: in
     p = ca.SX.sym("p", 4)  # delta_c after the turn, n_rpm, dt, time of the turn
     dc = ca.if_else(x[NX] >= p[3] - p[2] / 2, p[0], 0.0)
     step = ca.Function("last_moment_step", [x, p], [ca.vertcat(rk4(f, x[:NX], (dc, p[1]), p[2]), x[NX] + p[2]), dc])
-    return compile_function(step).mapaccum(n_steps)
+    return compile_function(step, label="the last-moment manoeuvre").mapaccum(n_steps)
 
 
 def last_moment_manoeuvre(target_start, target_velocity, t_turn: float, *, port: bool = False,

@@ -47,7 +47,7 @@ def _heading_loop_step(vessel: str = DEFAULT_VESSEL) -> ca.Function:
     psi, r = x[STATE_NAMES.index("psi")], x[STATE_NAMES.index("r")]
     dc = pd_heading(psi, p[0], r, p[1], p[2], math.radians(DELTA_MAX_DEG))
     return compile_function(ca.Function("pd_heading_loop_step", [x, p], [rk4(f, x, (dc, p[3]), p[4]), dc],
-                                        ["x", "p"], ["x_next", "delta_c"]))
+                                        ["x", "p"], ["x_next", "delta_c"]), label="the PD heading loop")
 
 
 def nonlinear_step(kp: float, kd: float, speed: float = 1.0, step_deg: float = 10.0, t_end: float = 60.0, *,
