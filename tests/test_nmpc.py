@@ -111,7 +111,7 @@ def test_head_on_run_records_every_solve_and_no_fallback(tmp_path):
 
 @pytest.mark.slow
 def test_re_posed_solves_match_the_closed_loop_plan():
-    from mmg_casadi.montecarlo.nmpc_solves import solve_statistics, solves_of_run
+    from mmg_casadi.closed_loop.nmpc_solves import solve_statistics, solves_of_run
     from mmg_casadi.scenarios.run import packaged_scenario
     from mmg_casadi.scenarios.scenario import with_method
     solves = solves_of_run(with_method(packaged_scenario("head_on"), "nmpc"))

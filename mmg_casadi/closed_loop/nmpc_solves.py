@@ -74,7 +74,8 @@ def solves_of_run(scenario, params: dict | None = None, *, ships=(0,), keep_inpu
     Returns
     -------
     list of dict
-        Per solve: ``ship``, ``t`` (L/U), ``time_us`` (the compiled solver's wall time), ``iterations`` and
+        Per solve: ``ship``, ``t`` (L/U), ``time_us`` and ``cpu_us`` (the compiled solver's wall and CPU time:
+        on a loaded machine the CPU time is the cost), ``iterations`` and
         ``status`` (``sqpmethod``'s), ``f0``, ``f``, ``kkt`` (:func:`~mmg_casadi.guidance.nmpc_ocp.solver_function`),
         ``failed`` (the planner's failure test), ``max_plan_difference`` (the compiled solution against the plan
         the closed loop stored; nan when the solve failed).
@@ -125,9 +126,9 @@ def solves_of_run(scenario, params: dict | None = None, *, ships=(0,), keep_inpu
                                           Pi["half_beam"] if lay.n_walls else 0, ca.vertcat(*own))
             if float(need) < 0.5:
                 continue
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.thread_time()
             w, f0, f, kkt = compiled(w0, p, lbw, ubw)
-            elapsed = time.perf_counter() - t0
+            elapsed, cpu = time.perf_counter() - t0, time.thread_time() - c0
             solver(x0=w0, p=p, lbx=lbw, ubx=ubw)
             stats = solver.stats()
             w = np.array(w).ravel()
@@ -135,7 +136,7 @@ def solves_of_run(scenario, params: dict | None = None, *, ships=(0,), keep_inpu
             failed = not np.all(np.isfinite(w)) or not np.isfinite(f) or (kkt > kkt_fail and f >= f0)
             stored = np.array([traj.states[k + 1][i, S_[name]] for name in PLAN])
             steered = traj.auxiliary("reactive", i)[k] > 0.5  # the plan is kept only while the planner steers
-            out.append({"ship": i, "t": float(traj.t[k]), "time_us": 1e6 * elapsed,
+            out.append({"ship": i, "t": float(traj.t[k]), "time_us": 1e6 * elapsed, "cpu_us": 1e6 * cpu,
                         "iterations": int(stats["iter_count"]), "status": str(stats["return_status"]),
                         "f0": f0, "f": f, "kkt": kkt, "failed": bool(failed),
                         "max_plan_difference": float(np.max(np.abs(stored - w))) if steered and not failed
@@ -156,7 +157,8 @@ def solve_statistics(solves) -> dict:
     Returns
     -------
     dict
-        ``solves``, ``time_us`` (median, p90, p99, max, mean), ``iterations`` (median, p90, p99, max, mean),
+        ``solves``, ``time_us`` and, when every solve has it, ``cpu_us`` (median, p90, p99, max, mean),
+        ``iterations`` (median, p90, p99, max, mean),
         ``statuses`` (count per return status), ``failed`` and ``failure_rate``, ``max_iterations_reached``,
         ``max_plan_difference`` (the largest over solves that did not fail).
 
@@ -171,6 +173,7 @@ def solve_statistics(solves) -> dict:
     if not solves:
         return {"solves": 0}
     t = np.array([s["time_us"] for s in solves])
+    cpu = np.array([s.get("cpu_us", np.nan) for s in solves])
     it = np.array([s["iterations"] for s in solves])
     statuses: dict = {}
     for s in solves:
@@ -179,6 +182,8 @@ def solve_statistics(solves) -> dict:
                    "p99": float(np.percentile(a, 99)), "max": float(np.max(a)), "mean": float(np.mean(a))}
     diffs = [s["max_plan_difference"] for s in solves if not s["failed"]]
     failed = sum(s["failed"] for s in solves)
-    return {"solves": len(solves), "time_us": q(t), "iterations": q(it), "statuses": statuses, "failed": failed,
+    return {"solves": len(solves), "time_us": q(t), **({"cpu_us": q(cpu)} if np.all(np.isfinite(cpu)) else {}),
+            "iterations": q(it), "statuses": statuses, "failed": failed,
             "failure_rate": failed / len(solves),
+            "max_iterations_reached": statuses.get("Maximum_Iterations_Exceeded", 0),
             "max_plan_difference": float(np.nanmax(diffs)) if diffs else float("nan")}
