@@ -154,7 +154,7 @@ def _add_determinism(p: argparse.ArgumentParser) -> None:
 
 
 def _add_methods(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.METHODS)} "
+    p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.offered())} "
                    "(default: those the study compares)")
 
 
@@ -248,7 +248,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("simulate", help="run a scenario file or a packaged scenario by name")
     s.add_argument("file", type=_path, help="scenario TOML file, maritime-schema traffic situation (.json) or the "
                    "name of a packaged scenario (see `mmg-casadi scenarios`), e.g. head_on")
-    s.add_argument("--method", help=f"override settings.method: {', '.join(registry.METHODS)}")
+    s.add_argument("--method", help=f"override settings.method: {', '.join(registry.offered())}")
     _add_params(s)
     _add_plugin(s)
     s.add_argument("--out", type=_path, required=True, help="output directory")
