@@ -28,7 +28,13 @@ from mmg_casadi.scenarios.scenario import with_method
 
 
 def crossing_scenario():
-    """The packaged crossing with the own ship on ``nmpc`` and the target on ``none`` (holding)."""
+    """The packaged crossing with the own ship on ``nmpc`` and the target on ``none`` (holding).
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+    """
     sc = with_method(packaged_scenario("crossing"), "nmpc")
     return dataclasses.replace(sc, ships=(sc.ships[0], dataclasses.replace(sc.ships[1], method="none")))
 

@@ -93,7 +93,13 @@ class ReducedModel:
     fit_rms: dict
 
     def surge(self):
-        """The MMG model's straight-run surge acceleration ``f_u(u, ν)`` as a CasADi Function (U per L/U)."""
+        """The MMG model's straight-run surge acceleration ``f_u(u, ν)`` (U per L/U).
+
+        Returns
+        -------
+        casadi.Function
+            ``(u, nu) -> u_dot``.
+        """
         return _surge_function(self.vessel, self.unit)
 
     def coefficients(self, nu):

@@ -105,7 +105,13 @@ class OcpShape:
     blocks: int
 
     def key(self) -> str:
-        """Short identifier for Function names."""
+        """Short identifier for Function names.
+
+        Returns
+        -------
+        str
+            Hulls, horizon, slots and blocks, e.g. ``kcs_kcs_n20_k4_s2_w0_b4``.
+        """
         return (f"{self.vessel}_{self.unit}_n{self.horizon}_k{self.ships}_s{self.obstacles}_w{self.land}"
                 f"_b{self.blocks}")
 
