@@ -36,7 +36,7 @@ Examples
 >>> shape = OcpShape("kcs", "kcs", horizon=4, ships=1, obstacles=0, land=0, blocks=1)
 >>> layout_p = param_layout(shape)
 >>> layout_p["ships"].stop - layout_p["ships"].start
-12
+13
 """
 
 from __future__ import annotations

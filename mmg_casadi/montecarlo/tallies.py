@@ -14,6 +14,7 @@ Examples
 >>> t = TallyTable(d / "tallies.csv")
 >>> t.append([{"environment": 5, "method": "nmpc", "run": 0, "tallies": {"nmpc_solves": 10.0,
 ...                                                                    "nmpc_fallbacks": 1.0}}])
+1
 >>> summarize(t.read())[0]["nmpc_fallbacks"], summarize(t.read())[0]["fallback_rate"]
 (1.0, 0.1)
 """
