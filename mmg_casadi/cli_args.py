@@ -96,7 +96,7 @@ def _add_determinism(p: argparse.ArgumentParser) -> None:
 
 
 def _add_methods(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.METHODS)} "
+    p.add_argument("--methods", type=_methods, help=f"comma-separated methods: {', '.join(registry.offered())} "
                    "(default: those the study compares)")
 
 

@@ -123,7 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("simulate", help="run a scenario file or a packaged scenario by name")
     s.add_argument("file", type=_path, help="scenario TOML file, maritime-schema traffic situation (.json) or the "
                    "name of a packaged scenario (see `mmg-casadi scenarios`), e.g. head_on")
-    s.add_argument("--method", help=f"override settings.method: {', '.join(registry.METHODS)}")
+    s.add_argument("--method", help=f"override settings.method: {', '.join(registry.offered())}")
     _add_params(s)
     _add_plugin(s)
     s.add_argument("--out", type=_path, required=True, help="output directory")
@@ -194,8 +194,9 @@ def build_parser() -> argparse.ArgumentParser:
                             "(fraction of design speed, direction uniform), e.g. 0-0.1")
             sp.add_argument("--wind", default=None, metavar="LO-HI", help="per-run true wind speed range (m/s, "
                             "direction uniform), e.g. 0-15")
-            sp.add_argument("--targets", default=None, help="avoid | hold | mix:NAME=P,...: the sampled targets use "
-                            "the study's method, hold, or draw a behaviour each, e.g. mix:avoid=0.6,hold=0.3,wrong=0.1")
+            sp.add_argument("--targets", default=None, help="avoid | hold | METHOD | mix:NAME=P,...: the sampled "
+                            "targets use the study's method, hold, avoid with METHOD whatever the study's method, or "
+                            "draw a behaviour each, e.g. mix:avoid=0.6,hold=0.3,wrong=0.1 (same as --set targets=VALUE)")
             sp.add_argument("--vessels", default=None, help="hulls of the sampled target ships: own (default, the "
                             "own ship's), a vessel name, or two separated by a comma that the targets take in turn, "
                             "e.g. kvlcc2,kcs (mixed traffic; same as --set target_vessels=VALUE)")

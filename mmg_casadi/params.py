@@ -25,13 +25,12 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import re
-from dataclasses import dataclass
 from pathlib import Path
 
 from mmg_casadi.colregs.profiles import SCORING_PROFILES
-from mmg_casadi.errors import InputError, ParameterError, check_range
+from mmg_casadi.errors import InputError, ParameterError
+from mmg_casadi.param_spec import Param, _is_real
 from mmg_casadi.traffic.mix import ALLOWED as TARGETS_ALLOWED, parse_targets
 from mmg_casadi.vessel.library import VESSELS
 
@@ -50,138 +49,50 @@ _METHOD_GROUPS: dict[str, tuple[str, ...]] = {}
 """Groups added by registered methods: group name -> the names of its parameters (:func:`add_group`)."""
 
 
-@dataclass(frozen=True)
-class Param:
-    """One parameter.
+_P = Param
+_REAL = dict(low=None, high=None)
+
+TARGET_METHODS = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle", "velocity-obstacle-speed",
+                  "colregs-vortex", "nmpc")
+"""Methods the sampled target ships of a study may use whatever the study's method (parameter ``targets``): the
+shipped avoiding methods (:data:`mmg_casadi.guidance.methods.AVOIDING` and the on-demand ones; a test keeps the
+lists equal)."""
+TARGETS_TEXT = TARGETS_ALLOWED.replace("avoid, hold or ", f"avoid, hold, a method ({', '.join(TARGET_METHODS)}) or ",
+                                       1)
+"""The allowed values of ``targets``, in words."""
+
+
+def parse_study_targets(value, field: str = "targets", cls=InputError) -> str:
+    """``value`` checked as a value of ``targets``: ``avoid``, ``hold``, a method of :data:`TARGET_METHODS` or a
+    mix (:func:`mmg_casadi.traffic.mix.parse_targets`).
 
     Parameters
     ----------
-    name : str
-        Key in scenario files, ``--params`` files and the Python API.
-    default : float, int or str
-        The value used when nothing overrides it.
-    low, high : float or None
-        Bounds of the allowed interval (``None``: unbounded).
-    unit : str
-        Unit of the value (``""`` for dimensionless).
-    meaning : str
-        One line saying what it is.
-    source : str
-        Where the default comes from: a paper equation or table, or "our choice, because ...".
-    group : str, optional
-        One of :func:`groups`; a parameter declared with a method (``Method.params``) may leave it empty, the
-        registry sets it to the method's name.
-    low_open, high_open : bool
-        Whether the bounds are excluded.
-    kind : {"float", "int", "choice", "bool", "text"}
-        Numbers are floats unless ``"int"``; ``"choice"`` takes one of ``choices``; ``"bool"`` true or false;
-        ``"text"`` a string that ``parse`` checks.
-    choices : tuple of str
-        Allowed values of a ``"choice"``.
-    structural : bool
-        Changes the shape of the compiled closed loop (a :class:`~mmg_casadi.closed_loop.layout.Layout` field) rather
-        than a numeric input of it.
-    parse : callable, optional
-        For ``"text"``: ``parse(value, field, cls)`` returns the checked value or raises ``cls``; ``choices`` then
-        holds one string, the allowed values in words.
+    value : object
+        The value given.
+    field : str
+        Name in the error message.
+    cls : type
+        Error raised (an :class:`~mmg_casadi.errors.InputError` subclass).
+
+    Returns
+    -------
+    str
+        The value (a mix in its canonical form).
+
+    Examples
+    --------
+    >>> parse_study_targets("colregs-vortex"), parse_study_targets("mix:hold=0.5, avoid=0.5")
+    ('colregs-vortex', 'mix:hold=0.5,avoid=0.5')
     """
-
-    name: str
-    default: object
-    low: float | None
-    high: float | None
-    unit: str
-    meaning: str
-    source: str
-    group: str = ""
-    low_open: bool = False
-    high_open: bool = False
-    kind: str = "float"
-    choices: tuple = ()
-    structural: bool = False
-    parse: object = None
-
-    def allowed(self) -> str:
-        """Human-readable allowed values, as error messages print them.
-
-        Returns
-        -------
-        str
-            E.g. ``"one of: ..."``, ``"true or false"``, ``"an integer >= 1"`` or the range text of
-            :func:`~mmg_casadi.errors.check_range`.
-
-        Examples
-        --------
-        >>> PARAMETERS["vo_cone"].allowed()
-        'one of: huang, wide'
-        >>> PARAMETERS["dt"].allowed()
-        'a number in (0, 2] L/U'
-        """
-        if self.kind == "choice":
-            return f"one of: {', '.join(self.choices)}"
-        if self.kind == "text":
-            return self.choices[0]
-        if self.kind == "bool":
-            return "true or false"
-        if self.kind == "int":
-            return f"an integer >= {self.low:g}" if self.high is None else f"an integer in [{self.low:g}, {self.high:g}]"
-        try:
-            check_range(self.name, math.nan, self.low, self.high, low_open=self.low_open,
-                        high_open=self.high_open, unit=self.unit)
-        except ParameterError as err:
-            return err.allowed
-        raise AssertionError("check_range accepted nan")
-
-    def check(self, value, field: str | None = None, cls=ParameterError):
-        """``value`` converted to this parameter's type if allowed, else ``cls`` naming ``field`` (default: name).
-
-        Parameters
-        ----------
-        value : object
-            The value to check.
-        field : str or None, optional
-            Name used in the error message (default: the parameter's name).
-        cls : type, default ParameterError
-            Exception class raised for an invalid value.
-
-        Returns
-        -------
-        str or bool or int or float
-            The value: the choice, the bool, ``int(value)`` or the float within the range.
-
-        Examples
-        --------
-        >>> PARAMETERS["vo_candidates"].check(40)
-        40
-        >>> PARAMETERS["ilos_delta"].check(0, field="settings.ilos_delta")
-        Traceback (most recent call last):
-        ...
-        mmg_casadi.errors.ParameterError: settings.ilos_delta: expected a number in (0, inf) L, got 0
-        """
-        field = field or self.name
-        if self.kind == "text":
-            return self.parse(value, field, cls)
-        if self.kind == "choice":
-            if not isinstance(value, str) or value not in self.choices:
-                raise cls(field, self.allowed(), value)
-            return value
-        if self.kind == "bool":
-            if not isinstance(value, bool):
-                raise cls(field, self.allowed(), value)
-            return value
-        if self.kind == "int":
-            if (isinstance(value, bool) or not isinstance(value, int) or value < self.low
-                    or (self.high is not None and value > self.high)):
-                raise cls(field, self.allowed(), value)
-            return int(value)
-        if not _is_real(value) or isinstance(value, int) and abs(value) > 2 ** 1023 or not math.isfinite(value):
-            raise cls(field, self.allowed(), value)  # an int beyond any float: refused, not an OverflowError
-        return check_range(field, value, self.low, self.high, low_open=self.low_open, high_open=self.high_open,
-                           cls=cls, unit=self.unit)
+    if isinstance(value, str) and value in TARGET_METHODS:
+        return value
+    try:
+        return parse_targets(value, field)
+    except InputError:
+        raise cls(field, TARGETS_TEXT, value) from None
 
 
-_P = Param
-_REAL = dict(low=None, high=None)
 PARAMETERS: dict[str, Param] = {p.name: p for p in (
     # simulation
     _P("dt", 0.25, 0.0, 2.0, "L/U", "guidance step; the rudder command is held over it (RK4, one step)",
@@ -434,10 +345,12 @@ PARAMETERS: dict[str, Param] = {p.name: p for p in (
        "(benchmarks/colregs_scoring.py)", "outcome", kind="bool"),
     _P("targets", "avoid", None, None, "", "what the sampled target ships of the statistical study do: 'avoid' "
        "(every ship uses the study's method), 'hold' (ships other than the own ship hold course and speed, "
-       "method 'none') or a mix 'mix:avoid=0.6,hold=0.3,wrong=0.1' drawn per ship (behaviours avoid, hold, late, "
-       "wrong, intent: mmg_casadi.traffic); only the study's sampled scenarios read it", "avoid: the paper's "
-       "statistical analysis; hold: the own ship alone responsible, as the Imazu study's held targets; a mix: "
-       "issue 48", "outcome", kind="text", choices=(TARGETS_ALLOWED,), parse=parse_targets),
+       "method 'none'), avoid with the method named (every method of the study then meets the same targets) or a "
+       "mix 'mix:avoid=0.6,hold=0.3,wrong=0.1' drawn per ship (behaviours avoid, hold, late, wrong, intent: "
+       "mmg_casadi.traffic); only the study's sampled scenarios read it", "avoid: the paper's statistical analysis; "
+       "hold: the own ship alone responsible, as the Imazu study's held targets; a method: a planner too costly "
+       "for every ship of a Monte Carlo (nmpc) on the own ship only; a mix: issue 48", "outcome", kind="text",
+       choices=(TARGETS_TEXT,), parse=parse_study_targets),
     _P("target_slowdown", 0.0, 0.0, 0.6, "", "fraction of its speed every sampled target ship takes off halfway "
        "along its route (a waypoint at the midpoint, the reduced speed on the leg to the goal); 0: constant speed; "
        "only the study's sampled scenarios read it", "0: the paper's constant-speed targets; at most 0.6 keeps "
@@ -570,9 +483,25 @@ def check_value(name: str, value, *, field: str | None = None, cls=ParameterErro
     ...
     mmg_casadi.errors.ParameterError: params.r_saf: expected a parameter name (one of: dt, t_max, ...
     """
-    if name not in PARAMETERS:
+    if name not in PARAMETERS and not any(hook(name) for hook in _UNKNOWN_HOOKS):
         raise cls(field or name, f"a parameter name (one of: {', '.join(PARAMETERS)})")
     return PARAMETERS[name].check(value, field=field, cls=cls)
+
+
+_UNKNOWN_HOOKS: list = []
+"""Callables ``name -> bool`` asked about a name not in the table before it is refused (the method registry's
+on-demand methods, :func:`mmg_casadi.guidance.methods.load_on_demand`); True when the name is in the table now."""
+
+
+def on_unknown_parameter(hook) -> None:
+    """Have :func:`check_value` ask ``hook(name)`` about a parameter name not in the table before refusing it.
+
+    Parameters
+    ----------
+    hook : callable
+        ``name -> bool``: True if it entered ``name`` into :data:`PARAMETERS`.
+    """
+    _UNKNOWN_HOOKS.append(hook)
 
 
 def resolve(*layers: dict | None, cls=ParameterError, prefix: str = "") -> dict:
@@ -741,9 +670,6 @@ def check_fields(obj) -> None:
             scale = f.metadata["scale"]
             check_value(f.metadata["param"], value / scale if scale != 1.0 and _is_real(value) else value)
 
-
-def _is_real(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 def markdown_table() -> str:

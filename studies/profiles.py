@@ -165,7 +165,8 @@ def run(out, *, runs: int = 1000, envs="5", methods=("colregs-vortex",), base_se
         from mmg_casadi.errors import InputError
         raise InputError("--envs/--methods", "one environment and one method", f"{list(env)}/{list(method)}")
     resolved = resolve(params, prefix="params.")
-    registry.check_used(params, (method[0], "none") if resolved["targets"] == "hold" else method, prefix="params.")
+    targets = {"avoid": (), "hold": ("none",)}.get(resolved["targets"], (resolved["targets"],))
+    registry.check_used(params, (method[0], *targets), prefix="params.")
     tasks = [LadderTask(**{f.name: getattr(t, f.name) for f in dataclasses.fields(t)})
              for t in plan_batches(env, method, runs, base_seed=base_seed, params=params, batch_size=50)]
     prepare_layouts([layout_for(env[0], method[0], params)], workers or 1, log=sys.stderr)

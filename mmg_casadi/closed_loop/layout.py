@@ -280,14 +280,26 @@ class Layout:
     @functools.cached_property
     def memory(self) -> tuple[str, ...]:
         """Memory rows of the methods this layout uses (``Method.memory``), in
-        registry order; every ship of the layout has them."""
+        registry order; every ship of the layout has them (an on-demand method is registered first,
+        :func:`~mmg_casadi.guidance.methods.load_on_demand`)."""
         used = set(self.methods)
+        for name in sorted(used):
+            methods.load_on_demand(name)
         out = []
         for n, m in methods.METHODS.items():
             out += [k for k in m.memory if n in used and k not in out]
         if self.commanded:
             out += [k for k in COMMAND_ROWS[:1 + int(self.command_rpm)] if k not in out]
         return tuple(out)
+
+    @functools.cached_property
+    def tallies(self) -> tuple[str, ...]:
+        """The memory rows of the layout's methods that are tallies (``Method.tallies``: counts over a run that
+        start at 0 and are never reset), in :attr:`memory` order; empty for the shipped methods."""
+        memory = self.memory  # registers an on-demand method first
+        used = set(self.methods)
+        names = {k for n, m in methods.METHODS.items() if n in used for k in m.tallies}
+        return tuple(k for k in memory if k in names)
 
     @functools.cached_property
     def ship_state(self) -> tuple[str, ...]:

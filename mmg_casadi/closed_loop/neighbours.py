@@ -14,6 +14,7 @@ import casadi as ca
 
 from mmg_casadi.closed_loop.layout import GLOBAL_PARAMS, Layout
 from mmg_casadi.guidance import methods
+from mmg_casadi.guidance.contract import OWN_STATE
 from mmg_casadi.guidance.methods import GuidanceInputs, command_vector, forget_on_unregister
 
 SLOTS = (1, 2, 4)
@@ -51,6 +52,8 @@ def dispatch_args(layout: Layout, g: GuidanceInputs) -> list:
             ca.vertcat(*[g.P[k] for k in _method_scalars(layout)])]
     if layout.n_walls:  # the walls and the half beam of the methods' land test
         args += [g.walls, g.half_beam]
+    if g.own:  # the ship's own state, for a method with own_state
+        args.append(ca.vertcat(*[g.own[k] for k in OWN_STATE]))
     return args
 
 
@@ -84,6 +87,11 @@ def within_range(layout: Layout, method: str, m: int) -> ca.Function:
     if layout.n_walls:
         walls, half_beam = ca.SX.sym("walls", 4, layout.n_walls), ca.SX.sym("half_beam")
         sym += [walls, half_beam]
+    own = {}
+    if spec.own_state:
+        own_v = ca.SX.sym("own", len(OWN_STATE))
+        sym.append(own_v)
+        own = {k: own_v[n] for n, k in enumerate(OWN_STATE)}
 
     def branch(slots):
         if slots >= m:
@@ -104,7 +112,7 @@ def within_range(layout: Layout, method: str, m: int) -> ca.Function:
         g = GuidanceInputs(pos=pos, vel=vel, psi=psi, speed=speed, goal=goal, nb_pos=g_pos, nb_vel=g_vel,
                            nb_radius=g_rad, active=g_act, P=P, layout=layout,
                            memory={k: mem[j] for j, k in enumerate(spec.memory)}, service_rpm=rpm, walls=walls,
-                           half_beam=half_beam)
+                           half_beam=half_beam, own=own)
         return ca.Function(f"{method.replace('-', '')}_{layout.key()}_m{m}_s{min(slots, m)}", sym,
                            [command_vector(spec, spec.builder(g))], {"cse": True})
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from mmg_casadi.closed_loop.layout import Layout
+from mmg_casadi.guidance import methods
 from mmg_casadi.perception import layer as perception_layer
 from mmg_casadi.vessel.library import load_vessel
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed, scene_scales
@@ -64,8 +65,8 @@ def initial_state(layout: Layout, ships: list[dict], params: dict | None = None)
         goal = np.asarray(s["path"], float).reshape(-1, 2)[-1]
         row[col("best_goal_dist")] = float(np.hypot(*(goal - np.asarray(s["start"], float))))
         row[col("x_best")], row[col("y_best")] = s["start"]
-        for name in layout.memory:  # every memory row starts at the heading
-            row[col(name)] = float(s["heading"])
+        for name in layout.memory:  # every memory row starts at the heading, a tally at 0
+            row[col(name)] = 0.0 if name in layout.tallies else float(s["heading"])
         if "command_rpm" in layout.memory:  # a commanded ship's propeller order starts at her engine's speed
             row[col("command_rpm")] = row[col("n_prop")]
         x[layout.ship_block(i)] = row
@@ -130,3 +131,28 @@ def state_of(layout: Layout, X, name: str, ship: int | None = None) -> np.ndarra
     """
     col = ship_rows(layout, X)[..., layout.column(name)]
     return col if ship is None else col[..., ship]
+
+
+def tallies(layout: Layout, x) -> list[dict]:
+    """The tallies (``Method.tallies``: counts over a run) of every ship in the scenario state ``x``.
+
+    Parameters
+    ----------
+    layout : Layout
+        Closed-loop layout of the state.
+    x : numpy.ndarray (nx,)
+        A scenario state (e.g. the final one).
+
+    Returns
+    -------
+    list of dict
+        Per ship, ``{name: count}`` of the tallies of her own method (empty for a method without tallies).
+
+    Examples
+    --------
+    >>> tallies(Layout(("none",)), np.zeros(Layout(("none",)).nx))
+    [{}]
+    """
+    rows = ship_rows(layout, np.asarray(x, float))
+    return [{k: float(rows[i, layout.column(k)]) for k in methods.get(m).tallies}
+            for i, m in enumerate(layout.methods)]

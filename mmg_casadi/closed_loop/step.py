@@ -315,11 +315,16 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
         if land is not None:
             w_react = _either(w_react, land["ahead"], sm)
         speed = ca.norm_2(vel[i]) if layout.disturbed else ca.sqrt(Xi[S_["u"]] ** 2 + Xi[S_["v"]] ** 2)
+        own = {}
+        if spec.own_state:  # the ship's own state and engine, for a method that predicts with a model of her
+            own = {k: Xi[S_[k]] for k in ("u", "v", "r", "delta", "n_prop")}
+            own.update({k: Pi[k] for k in ("rpm_min", "rpm_max")}, engine_rate=Pi["engine_rate"],
+                       engine_lag=Pi["engine_lag"])
         inputs = GuidanceInputs(pos=pos[i], vel=vel[i], psi=psi[i], speed=speed, goal=goal_seen,
                                 nb_pos=nb_pos, nb_vel=nb_vel, nb_radius=nb_rad, active=look, P=P,
                                 layout=layout, memory={k: Xi[S_[k]] for k in spec.memory},
                                 service_rpm=n_service, walls=walls if W else None,
-                                half_beam=Pi["half_beam"] if W else None)
+                                half_beam=Pi["half_beam"] if W else None, own=own)
         if sparse and M > 1:
             command = command_from_vector(spec, within_range(layout, method, M)(ca.sum2(look),
                                                                                *dispatch_args(layout, inputs)))
@@ -389,6 +394,10 @@ def _ship_update(layout: Layout, i: int, c: dict, mmg, n_sub: int, *, sparse: bo
     for k in layout.memory:  # the method's memory while a neighbour is within R_safe, else the heading
         if k in COMMAND_ROWS:  # the orders of a commanded ship: written by the caller, carried unchanged
             memory.append(Xi[S_[k]])
+            continue
+        if k in layout.tallies:  # a count over the run: the builder's value while the method steers, else kept
+            counted = cmd[0].memory.get(k) if cmd is not None else None
+            memory.append(Xi[S_[k]] if counted is None else ca.if_else(w_react > 0.5, counted, Xi[S_[k]]))
             continue
         held = cmd[0].memory.get(k) if cmd is not None and cmd[1] is not None else None
         memory.append(psi_next if held is None else ca.if_else(cmd[1], held, psi_next))

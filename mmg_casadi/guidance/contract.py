@@ -20,7 +20,7 @@ dead slow ahead .. maximum rpm; any other method keeps the service propeller spe
 Numbers the builder reads come from ``g.P`` by name: the closed loop's parameters
 (:data:`~mmg_casadi.closed_loop.layout.GLOBAL_PARAMS`: ``r_safe``, ``collision_distance``, ``lam_sink``, ...), the
 ``inputs`` the method lists (table parameters only this method reads) and the method's own parameters (``params``;
-each a :class:`~mmg_casadi.params.Param` with default, range, unit, meaning and source, named with the method's
+each a :class:`~mmg_casadi.param_spec.Param` with default, range, unit, meaning and source, named with the method's
 ``prefix``). Its own parameters join the one parameter table (:data:`mmg_casadi.params.PARAMETERS`, group = the
 method's name) while the method is registered, so scenario files, ``--set``, ``--params``, ``mmg-casadi params``,
 ``study sweep`` and the tuners reach them, and a run none of whose ships uses the method refuses them
@@ -107,6 +107,11 @@ class GuidanceInputs:
         land test exists only in layouts with walls).
     half_beam : SX, optional
         Half the ship's beam (L), given with ``walls``.
+    own : dict, optional
+        Only for a method with ``own_state``: the ship's own state and engine, by name: ``u``, ``v`` (U, through
+        the water), ``r`` (rad per L/U), ``delta`` (rudder angle, rad), ``n_prop`` (rev/min), ``rpm_min``,
+        ``rpm_max`` (the propeller speeds a method may order), ``engine_rate`` (rev/min per L/U) and
+        ``engine_lag`` (L/U); empty for every other method.
     """
 
     pos: object
@@ -124,6 +129,11 @@ class GuidanceInputs:
     service_rpm: object = None
     walls: object = None
     half_beam: object = None
+    own: dict = dataclasses.field(default_factory=dict)
+
+
+OWN_STATE: tuple[str, ...] = ("u", "v", "r", "delta", "n_prop", "rpm_min", "rpm_max", "engine_rate", "engine_lag")
+"""The entries of :attr:`GuidanceInputs.own`, in the order the sparse step passes them."""
 
 
 @dataclass(frozen=True)
@@ -197,7 +207,7 @@ class Method:
         no neighbour is within R_safe (an encounter with a ship within its lookout), so the closed loop neither
         hands the ship to ILOS nor resets the memory; None: the method steers only with a neighbour within R_safe.
     params : tuple of Param
-        The method's own parameters (:class:`~mmg_casadi.params.Param`: name, default, range, unit, meaning, source),
+        The method's own parameters (:class:`~mmg_casadi.param_spec.Param`: name, default, range, unit, meaning, source),
         each named with ``prefix``; :func:`~mmg_casadi.guidance.methods.register` enters them into the parameter table
         as the group named after the method (their ``group`` may be left empty). Numeric ones are step inputs (in
         ``g.P``), ``structural`` ones fields of the step's shape (``g.layout.option(name)``).
@@ -215,6 +225,13 @@ class Method:
         The method keeps to the starboard side of a narrow channel or fairway (COLREG Rule 9(a)): in layouts with
         walls or land, ILOS and the builder's goal follow a lane ``bank_clearance`` from the starboard bank of a
         channel at most ``channel_width`` wide (:mod:`mmg_casadi.guidance.fairway`).
+    own_state : bool
+        The builder also gets the ship's own state and engine (:attr:`GuidanceInputs.own`), e.g. for a planner
+        that predicts with a model of the ship.
+    tallies : tuple of str
+        Memory rows that count events over a run (e.g. solves and failures of a planner): they start at 0, take the
+        builder's value while the method steers and keep their value otherwise (never reset to the heading); the
+        run's outputs report them (:func:`~mmg_casadi.guidance.methods.tallies_of`).
     """
 
     name: str
@@ -234,6 +251,8 @@ class Method:
     prefix: str | None = None
     land_test: bool | None = None
     rule9: bool = False
+    own_state: bool = False
+    tallies: tuple[str, ...] = ()
 
     @property
     def tests_land(self) -> bool:

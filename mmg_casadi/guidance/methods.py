@@ -41,7 +41,8 @@ from mmg_casadi.guidance.colregs_vortex import ColregsVortexParams
 from mmg_casadi.errors import InputError, ParameterError
 from mmg_casadi.guidance.contract import (Command, GuidanceInputs, Method, command_from_vector,  # noqa: F401 (re-exported)
                                          command_vector, input_name)
-from mmg_casadi.params import CLOSED_LOOP_GROUPS, PARAMETERS, Param, add_group, groups as param_groups, remove_group
+from mmg_casadi.params import (CLOSED_LOOP_GROUPS, PARAMETERS, Param, add_group, groups as param_groups,
+                               on_unknown_parameter, remove_group)
 from mmg_casadi.vessel.library import load_vessel
 from mmg_casadi.vessel.mmg import propeller_rpm_for_speed
 
@@ -249,6 +250,9 @@ def _check_method(method: Method) -> Method:
     if method.lookout is not None and method.sensing is not None:
         raise InputError("method.sensing", "None when the method has a lookout (one of the two ranges)",
                          method.sensing)
+    bad_tally = [k for k in method.tallies if k not in method.memory]
+    if bad_tally:
+        raise InputError("method.tallies", "names of the method's memory rows", bad_tally[0])
     for attr in ("turn_limit", "lookout", "sensing"):
         value = getattr(method, attr)
         if value is not None and value not in method.step_inputs:
@@ -344,6 +348,65 @@ def unregister(name: str) -> None:
             forget()
 
 
+ON_DEMAND: dict[str, str] = {"nmpc": "mmg_casadi.guidance.nmpc"}
+"""Methods shipped with the package that are registered the first time a run names them or one of their
+parameters (:func:`load_on_demand`), by name: the module whose ``METHOD`` is registered. Their parameters enter the
+table only then, so the records (``metrics.json``, ``runs.params.json``) of runs that never name them stay exactly
+as they were."""
+
+
+def on_demand_method(name: str) -> Method:
+    """The declaration of the on-demand method ``name`` (:data:`ON_DEMAND`), without registering it.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`ON_DEMAND`.
+
+    Returns
+    -------
+    Method
+        Its module's ``METHOD``.
+    """
+    return importlib.import_module(ON_DEMAND[name]).METHOD
+
+
+def load_on_demand(name) -> bool:
+    """Register the on-demand method ``name`` (:data:`ON_DEMAND`) if it is not yet registered.
+
+    Parameters
+    ----------
+    name : str
+        A method name.
+
+    Returns
+    -------
+    bool
+        Whether ``name`` is registered now (False for a name that is neither registered nor on demand).
+
+    Examples
+    --------
+    >>> load_on_demand("no-such-method")
+    False
+    """
+    if not isinstance(name, str):
+        return False
+    if name not in METHODS and name in ON_DEMAND:
+        register(on_demand_method(name))
+    return name in METHODS
+
+
+def _load_for_parameter(name: str) -> bool:
+    """Register the on-demand method whose parameter prefix ``name`` carries (the parameter table's hook)."""
+    for method, module in ON_DEMAND.items():
+        if method not in METHODS and name.startswith(re.sub(r"[-.]", "_", method) + "_"):
+            return load_on_demand(method) and name in PARAMETERS
+    return False
+
+
+on_unknown_parameter(_load_for_parameter)
+
+
 ENTRY_POINTS = "mmg_casadi.methods"
 """The entry-point group of installed plugins (:mod:`mmg_casadi.guidance.plugins`)."""
 _INSTALLED_DONE = False
@@ -420,11 +483,35 @@ def get(name, field: str = "method", cls=InputError) -> Method:
     >>> get("vortex")
     Traceback (most recent call last):
     ...
-    mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, velocity-obstacle-speed, none, colregs-vortex, sb-mpc, got 'vortex'
+    mmg_casadi.errors.InputError: method: expected one of: inverse-square, sink-vortex, modified-vortex, velocity-obstacle, velocity-obstacle-speed, none, colregs-vortex, sb-mpc, nmpc, got 'vortex'
     """
-    if not isinstance(name, str) or name not in names():
-        raise cls(field, f"one of: {', '.join(METHODS)}", name)
+    if not isinstance(name, str) or (name not in names() and not load_on_demand(name)):
+        raise cls(field, f"one of: {', '.join(offered())}", name)
     return METHODS[name]
+
+
+def offered(name=None) -> tuple[str, ...]:
+    """The method names a run may name: the registered ones, then the on-demand ones not yet registered; with
+    ``name``, the on-demand method of that name is registered first (:func:`load_on_demand`).
+
+    Parameters
+    ----------
+    name : object, optional
+        A name about to be checked against the result.
+
+    Returns
+    -------
+    tuple of str
+        The names, registered first.
+
+    Examples
+    --------
+    >>> "nmpc" in offered()
+    True
+    """
+    load_on_demand(name)
+    names()
+    return tuple(METHODS) + tuple(n for n in ON_DEMAND if n not in METHODS)
 
 
 def parse_list(value, field: str = "methods") -> tuple[str, ...]:
@@ -447,7 +534,8 @@ def parse_list(value, field: str = "methods") -> tuple[str, ...]:
     >>> parse_list("none, inverse-square,none")
     ('none', 'inverse-square')
     """
-    allowed = f"a non-empty list of: {', '.join(names())}"
+    names()
+    allowed = f"a non-empty list of: {', '.join(offered())}"
     if isinstance(value, str):
         value = [m.strip() for m in value.split(",") if m.strip()]
     try:
@@ -457,7 +545,7 @@ def parse_list(value, field: str = "methods") -> tuple[str, ...]:
     if not items:
         raise InputError(field, allowed, value)
     for m in items:
-        if not isinstance(m, str) or m not in METHODS:
+        if not isinstance(m, str) or (m not in METHODS and not load_on_demand(m)):
             raise InputError(field, allowed, m)
     return tuple(dict.fromkeys(items))
 

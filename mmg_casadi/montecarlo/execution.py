@@ -70,6 +70,7 @@ from mmg_casadi.closed_loop.simulation import (
 from mmg_casadi.closed_loop.layout import Layout
 from mmg_casadi.closed_loop.outcome import run_outcome
 from mmg_casadi.closed_loop.problem import ClosedLoopModel, build_problem
+from mmg_casadi.closed_loop.state import tallies
 from mmg_casadi.colregs.narrow_channel import rule9
 from mmg_casadi.colregs.profiles import SCORING_PROFILES, scoring_profile
 from mmg_casadi.colregs.scorer import prepare, score_prepared
@@ -77,7 +78,7 @@ from mmg_casadi.guidance.methods import forget_on_unregister
 from mmg_casadi.montecarlo.encounter_summary import format_verdicts
 from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceRanges, sample_disturbance
 from mmg_casadi.montecarlo.failures import failure_mechanism, turn_time_90, unavoidable_at_start
-from mmg_casadi.montecarlo.results import RUN_COLUMNS
+from mmg_casadi.montecarlo.results import RUN_COLUMNS, TALLIES_KEY
 from mmg_casadi.montecarlo.sampling import sample_scenario
 from mmg_casadi.params import PARAMETERS, resolve
 from mmg_casadi.perception.layer import perception_error, run_seed
@@ -529,6 +530,9 @@ def run_scenarios(scenarios, *, params: dict | None = None, chunk: int = DEFAULT
             row = run_outcome(problems[i].layout, XF[:, col], problems[i].params)
             row["guidance_call_us"] = us
             row["perception_error"] = perception_error(layout, XF[:, col])
+            counts = tallies(layout, XF[:, col])[0]  # the own ship's planner counts, if her method has any
+            if counts:
+                row[TALLIES_KEY] = counts
             if explain:
                 row.update(explain_run(scenarios[i], problems[i].model, XF[:, col], *hist.column(col)))
                 if histories is not None:
@@ -578,7 +582,7 @@ def run_batch(environment: int, method: str, runs, base_seed: int = 0, *, params
     for r, res, d in zip(runs, results, env):
         row = {"environment": int(environment), "method": method, "run": r, "seed": int(base_seed), **res, **d,
                "target_behaviours": target_behaviours(environment, r, base_seed, res["n_ships"], params)}
-        rows.append({c: row.get(c) for c in RUN_COLUMNS})
+        rows.append({c: row.get(c) for c in RUN_COLUMNS + ((TALLIES_KEY,) if TALLIES_KEY in res else ())})
     return rows
 
 

@@ -47,6 +47,10 @@ under every scoring profile (:data:`mmg_casadi.montecarlo.execution.PROFILE_COLU
 own ship's method saw the targets within R_safe and where they were, :mod:`mmg_casadi.perception`; empty with
 perfect knowledge); a table of another version is refused, never misread."""
 
+TALLIES_KEY = "tallies"
+"""Key of a row that carries the own ship's tallies (``Method.tallies``) beside the columns; not a column of
+``runs.csv`` (the study keeps them in ``tallies.csv``, :mod:`mmg_casadi.montecarlo.tallies`)."""
+
 _RETIRED_COLUMNS = frozenset({"colregs_encounters"})  # columns of older versions, no longer written
 
 MECHANISMS: tuple[str, ...] = failure_mechanisms.MECHANISMS
@@ -264,7 +268,7 @@ class ResultsTable:
         for i, row in enumerate(rows):
             if not isinstance(row, dict):
                 raise InputError(f"rows[{i}]", "a dict keyed by the results columns", type(row).__name__)
-            unknown = set(row) - set(RUN_COLUMNS)
+            unknown = set(row) - set(RUN_COLUMNS) - {TALLIES_KEY}
             if unknown:
                 raise InputError(f"rows[{i}]", f"keys among {', '.join(RUN_COLUMNS)}", ", ".join(sorted(unknown)))
             missing = [c for c in KEY_COLUMNS if row.get(c) is None]

@@ -236,8 +236,10 @@ class SampledScenario:
             Time step and time limit (non-dimensional time L/U).
         r_safe, collision_distance : float
             Safe radius and collision distance in L.
-        targets : {"avoid", "hold"}
-            ``"hold"``: every ship but the own ship gets the method ``"none"`` (holds course and speed).
+        targets : str
+            ``"avoid"`` (every ship the study's method), ``"hold"``: every ship but the own ship gets the method
+            ``"none"`` (holds course and speed), or a method that every ship but the own ship gets (parameter
+            ``targets``).
         target_slowdown : float, default 0
             Fraction of its speed every ship but the own ship takes off halfway along its route: its waypoints
             become the midpoint and the goal, with the speeds ``[v, (1 - target_slowdown) v]`` (parameter
@@ -298,9 +300,9 @@ class SampledScenario:
             }
             for i in range(self.n_ships)
         ]
-        if targets == "hold":
+        if targets != "avoid":  # hold course and speed ("none"), or avoid with the method named
             for ship in ships[1:]:
-                ship["method"] = "none"
+                ship["method"] = "none" if targets == "hold" else targets
         if target_vessels != "own":
             hulls = target_vessels.split(",")
             for k, ship in enumerate(ships[1:]):

@@ -64,8 +64,9 @@ from mmg_casadi.montecarlo.disturbance_sampling import ENV_COLUMNS, DisturbanceR
 from mmg_casadi.montecarlo.execution import (DEFAULT_CHUNK, _non_default, _run_disturbances, layout_for,
                                              profile_columns, sampled_scenario)
 from mmg_casadi.montecarlo.results import ResultsTable, summarize
+from mmg_casadi.montecarlo.tallies import TallyTable, summarize as tally_summary, to_markdown as tallies_markdown
 from mmg_casadi.montecarlo.sampling import ALL_ENVIRONMENTS, parse_envs
-from mmg_casadi.params import PARAMETERS, diff, resolve
+from mmg_casadi.params import PARAMETERS, TARGET_METHODS, diff, resolve
 from mmg_casadi.perception.layer import unused_parameter
 from mmg_casadi.traffic.mix import is_mix
 from mmg_casadi.traffic.sample import RANGES as TRAFFIC_RANGES
@@ -145,7 +146,8 @@ def check_study_args(*, runs=200, envs=(1, 2, 3, 4, 5), methods=DEFAULT_METHODS,
     batch_size = _check_int("batch_size", batch_size, 1)
     chunk = _check_int("chunk", chunk, 1)
     resolved = resolve(params, prefix="params.")
-    method_registry.check_run((*methods, "none"), params)  # targets that hold use "none"
+    target_method = (resolved["targets"],) if resolved["targets"] in TARGET_METHODS else ()  # targets on a method
+    method_registry.check_run((*methods, "none", *target_method), params)  # targets that hold use "none"
     _check_traffic_and_sensors(resolved)
     ranges = DisturbanceRanges(current=current, wind=wind)
     for name, rng in (("current", ranges.current), ("wind", ranges.wind)):
@@ -255,6 +257,7 @@ def _exclusive(out: Path):
 def _run_study(out, runs, envs, methods, base_seed, params, backend, address, workers, progress, batch_size,
                chunk, executor, ranges=DisturbanceRanges()):
     table = ResultsTable(out / "runs.csv")
+    tally_table = TallyTable(out / "tallies.csv")
     planned = {(e, m, r) for e in envs for m in methods for r in range(runs)}
     done = check_resumable(out, runs=runs, envs=envs, methods=methods, base_seed=base_seed, params=params,
                            ranges=ranges)  # again, under the lock
@@ -280,6 +283,7 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
                 bar = progress_bar(len(planned), desc="statistics", initial=len(done))
             try:
                 for _task, rows in executor.run(tasks):
+                    tally_table.append(rows)  # first: a run's counts are never missing for a stored row
                     written = table.append(rows)
                     new_runs += written
                     if bar is not None:
@@ -304,18 +308,22 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
     from mmg_casadi.montecarlo.plots import plot_statistics  # matplotlib: imported only when a study is written
     # the final files: each written under a temporary name, all renamed at the end with metrics.json last (an
     # interruption leaves the old set or the new, never a part of a file)
+    counted = tally_summary([r for r in tally_table.read() if (r["environment"], r["method"], r["run"]) in planned])
     with StagedFiles() as st:
         summary.to_csv(st.path(out / "summary.csv"))
         write_csv(comparisons, st.path(out / "comparisons.csv"))
         encounter_summary.write_csv(by_encounter, st.path(out / "colregs.csv"), encounter_summary.ENCOUNTER_COLUMNS)
         encounter_summary.write_csv(encounter_pairs, st.path(out / "colregs_comparisons.csv"),
                                     encounter_summary.PAIR_COLUMNS)
+        # a method with tallies (nmpc's solves and fallbacks): their sums, beside summary.md's tables
+        tallied = ("\n## Tallies of the own ship (tallies.csv; mmg_casadi.montecarlo.tallies)\n\n"
+                   + tallies_markdown(counted) + "\n") if counted else ""
         write_text(st.path(out / "summary.md"),
                    summary.to_markdown() + "\n\n## Failure mechanisms (own ship; mmg_casadi.montecarlo.failures)\n\n"
                    + summary.failures_markdown() + "\n\n## Paired comparisons (same runs; exact McNemar test)\n\n"
                    + to_markdown(comparisons) + "\n\n## COLREG encounters with a risk of collision (own ship; profile "
                    + ", ".join(profile_columns(params)) + "; mmg_casadi.montecarlo.encounter_summary)\n\n"
-                   + encounter_summary.to_markdown(by_encounter, encounter_pairs) + "\n")
+                   + encounter_summary.to_markdown(by_encounter, encounter_pairs) + "\n" + tallied)
         plot_statistics(summary, st.path(out / "statistics.png"))
         failures = write_failures(rows, out / "failures", params=params, staged=st)
         config = {"runs": runs, "envs": list(envs), "methods": list(methods), "base_seed": base_seed,
@@ -323,6 +331,7 @@ def _run_study(out, runs, envs, methods, base_seed, params, backend, address, wo
                   "chunk": chunk, **ranges.to_dict()}
         write_json(st.path(out / "metrics.json"), {
             "config": config, "params": params, "summary": summary.rows, "comparisons": comparisons,
+            **({"tallies": counted} if counted else {}),
             "colregs": {"by_encounter": by_encounter, "comparisons": encounter_pairs},
             "runs_total": len(rows),
             "runs_new": new_runs, "elapsed_s": elapsed,

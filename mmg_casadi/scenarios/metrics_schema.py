@@ -50,6 +50,11 @@ def _obj(properties: dict, *, extra=False, description: str | None = None) -> di
     return out
 
 
+def _with_optional(obj: dict, properties: dict) -> dict:
+    """``obj`` (an :func:`_obj`) that also allows ``properties`` without requiring them."""
+    return {**obj, "properties": {**obj["properties"], **properties}}
+
+
 def _enum(values, *, null=False) -> dict:
     return {"enum": [*values, None] if null else list(values)}
 
@@ -86,12 +91,18 @@ def metrics_schema() -> dict:
     from mmg_casadi.colregs.verdict import RULES
     from mmg_casadi.guidance.hazards import KINDS
     from mmg_casadi.closed_loop.replay import REPLAY
-    from mmg_casadi.guidance.methods import METHODS
+    from mmg_casadi.guidance.methods import METHODS, ON_DEMAND, on_demand_method
     from mmg_casadi.params import PARAMETERS
+
+    # the on-demand methods (registered the first time a run names them) and their parameters are optional: a run
+    # that uses one records them, the others do not (mmg_casadi.guidance.methods.ON_DEMAND)
+    on_demand = {name: on_demand_method(name) for name in ON_DEMAND}
+    optional = {p.name: p for m in on_demand.values() for p in m.params}
+    method_names = list(dict.fromkeys([*(n for n in METHODS if n not in on_demand), *on_demand]))
 
     ship = _obj({
         "name": {"type": "string"},
-        "method": _enum([*METHODS, REPLAY]),
+        "method": _enum([*method_names, REPLAY]),
         "status": _enum(OUTCOMES),
         "reached_goal": {"type": "boolean"},
         "time_to_goal": _NUM,
@@ -126,6 +137,10 @@ def metrics_schema() -> dict:
         "where": _POINT,
     }, description="A route leg across land or within the grounding clearance of it "
                    "(mmg_casadi.scenarios.routes.check_routes).")
+    ship["properties"]["tallies"] = {
+        "description": "Counts over the run of a method with tallies (Method.tallies, e.g. nmpc's solves and "
+                       "fallbacks); only for a ship whose method has them.",
+        "type": "object", "additionalProperties": {"type": "number"}}
 
     moment = _obj({"t": _NUM, "range": _NUM})
     rule = _obj({"verdict": {"type": "boolean"}, "score": {"type": "number", "minimum": 0, "maximum": 1}},
@@ -193,11 +208,14 @@ def metrics_schema() -> dict:
         "description": "Written by `mmg-casadi simulate`, the studies of single scenarios and "
                        "ScenarioResult.save; distances in ship lengths L, times in L/U (mmg_casadi.scenarios.run).",
         **_obj({
-            "method": _enum(METHODS),
+            "method": _enum(method_names),
             "collision": {"type": "boolean"},
             "t_end": {"type": "number"},
-            "params": _obj({name: _param_schema(p) for name, p in PARAMETERS.items()},
-                           description="Every parameter of the table, resolved (mmg_casadi.params.PARAMETERS)."),
+            "params": _with_optional(
+                _obj({name: _param_schema(p) for name, p in PARAMETERS.items() if name not in optional},
+                     description="Every parameter of the table, resolved (mmg_casadi.params.PARAMETERS); the "
+                                 "parameters of an on-demand method only in a run that uses it."),
+                {name: _param_schema(p) for name, p in optional.items()}),
             "ships": {"type": "array", "minItems": 1, "items": {"$ref": "#/$defs/ship"}},
             "pairs": {"type": "array", "items": {"oneOf": [{"$ref": "#/$defs/ship_pair"},
                                                            {"$ref": "#/$defs/obstacle_pair"}]}},

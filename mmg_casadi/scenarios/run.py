@@ -67,6 +67,7 @@ from mmg_casadi.closed_loop.outcome import ship_outcomes
 from mmg_casadi.closed_loop.problem import build_problem
 from mmg_casadi.closed_loop.replay import REPLAY
 from mmg_casadi.closed_loop.simulation import Trajectory, simulate
+from mmg_casadi.closed_loop.state import tallies
 from mmg_casadi.colregs.assess import assess_pair
 from mmg_casadi.colregs.classify import get_profile
 from mmg_casadi.colregs.narrow_channel import rule9
@@ -388,6 +389,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
     unit = sc.ships[0].vessel or params["vessel"]
     sizes = [ship_size(s.vessel or params["vessel"], s.length_m, s.beam_m, unit=unit) for s in sc.ships]
     ships = []
+    counts = tallies(traj.layout, final)  # a planner's counts over the run (Method.tallies), if any
     for i, (s, o) in enumerate(zip(sc.ships, ship_outcomes(traj.layout, final, params))):
         ships.append({
             "name": s.name,
@@ -410,6 +412,7 @@ def assess(sc, traj: Trajectory, params: dict, *, profile=None) -> ScenarioResul
                       "waypoints": [list(w) for w in s.waypoints]},
             **(_speed_metrics(s, traj, i, mask[:, i], o["time_to_goal"], params["goal_tolerance"])
                if getattr(s, "track", None) is None else _replay_speed_metrics(traj, i, mask[:, i])),
+            **({"tallies": counts[i]} if counts[i] else {}),
         })
     pairs = []
     labels: dict = {}

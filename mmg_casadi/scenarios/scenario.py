@@ -429,8 +429,8 @@ def _settings(d: dict) -> Settings:
     if "settings" not in d:
         raise ScenarioError("settings", "a [settings] table (required)")
     s = _table(d["settings"], "settings", SETTINGS_KEYS)
-    method = _string(_required(s, "method", "settings", f"one of: {', '.join(methods.names())}"), "settings.method",
-                     methods.names())
+    method = _required(s, "method", "settings", f"one of: {', '.join(methods.offered())}")
+    method = _string(method, "settings.method", methods.offered(method))
     values = {k: check_value(k, v, field=f"settings.{k}", cls=ScenarioError) for k, v in s.items()
               if k != "method"}
     values.update(_environment(d, values))
@@ -466,7 +466,7 @@ def _ship(t: dict, i: int, base_dir=None) -> ShipSpec:
     speed = _ranged(_required(t, "speed", p, _range_text(f"{p}.speed", lo, hi, unit=unit)), f"{p}.speed", lo, hi,
                     unit=unit)
     waypoints = _points(_required(t, "waypoints", p, "a list of waypoints [[x, y], ...]"), f"{p}.waypoints", 1)
-    method = _string(t["method"], f"{p}.method", methods.names()) if "method" in t else None
+    method = _string(t["method"], f"{p}.method", methods.offered(t["method"])) if "method" in t else None
     stays = t.get("stays", False)
     if not isinstance(stays, bool):
         raise ScenarioError(f"{p}.stays", "true or false", stays)
@@ -698,7 +698,7 @@ def with_method(s: Scenario, method: str) -> Scenario:
     >>> with_method(s, "sink-vortex").settings.method
     'sink-vortex'
     """
-    method = _string(method, "method", methods.names())
+    method = _string(method, "method", methods.offered(method))
     return dataclasses.replace(s, settings=dataclasses.replace(s.settings, method=method))
 
 
