@@ -53,7 +53,7 @@ _P = Param
 _REAL = dict(low=None, high=None)
 
 TARGET_METHODS = ("inverse-square", "sink-vortex", "modified-vortex", "velocity-obstacle", "velocity-obstacle-speed",
-                  "colregs-vortex", "nmpc")
+                  "colregs-vortex", "sb-mpc", "nmpc")
 """Methods the sampled target ships of a study may use whatever the study's method (parameter ``targets``): the
 shipped avoiding methods (:data:`mmg_casadi.guidance.methods.AVOIDING` and the on-demand ones; a test keeps the
 lists equal)."""

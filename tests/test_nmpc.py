@@ -74,8 +74,11 @@ def test_a_tally_must_be_a_memory_row():
 
 def test_nmpc_is_on_demand_and_the_targets_may_use_another_method():
     assert "nmpc" in methods.offered()
-    assert set(TARGET_METHODS) == set(methods.AVOIDING) | set(methods.ON_DEMAND)
-    assert PARAMETERS["targets"].choices == ("avoid", "hold") + TARGET_METHODS
+    assert set(TARGET_METHODS) == set(methods.AVOIDING) | set(methods.PLANNERS) | set(methods.ON_DEMAND)
+    for name in TARGET_METHODS:
+        assert PARAMETERS["targets"].check(name) == name
+    with pytest.raises(InputError, match="targets: expected avoid, hold, a method .*nmpc.* or mix:"):
+        PARAMETERS["targets"].check("none")
     sc = sampled_scenario(5, "nmpc", 3, params={"targets": "colregs-vortex"})
     assert sc.ships[0].method in (None, "nmpc") and sc.settings.method == "nmpc"
     assert {sh.method for sh in sc.ships[1:]} == {"colregs-vortex"}
@@ -89,7 +92,8 @@ def test_targets_refuses_an_unknown_method(capsys):
     assert main(["study", "statistics", "--methods", "nmpc", "--targets", "vortex", "--runs", "1", "--envs", "5",
                  "--out", "/nonexistent/never"]) == 2
     err = capsys.readouterr().err
-    assert "--targets: expected one of: avoid, hold, " in err and "nmpc, got 'vortex'" in err
+    assert "--targets: expected avoid, hold, a method (" in err and "nmpc) or mix:" in err and "got 'vortex'" in err
+    assert len(err.splitlines()) == 1
 
 
 def test_head_on_run_records_every_solve_and_no_fallback(tmp_path):

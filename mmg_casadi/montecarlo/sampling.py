@@ -34,7 +34,7 @@ from mmg_casadi.errors import InputError
 from mmg_casadi.readers import is_finite
 from mmg_casadi.guidance.methods import DEFAULT as DEFAULT_METHOD
 from mmg_casadi.montecarlo.land_sampling import ENVIRONMENT as LAND_ENVIRONMENT, sample_strait
-from mmg_casadi.params import PARAMETERS
+from mmg_casadi.params import PARAMETERS, TARGET_METHODS
 from mmg_casadi.traffic.mix import is_mix
 from mmg_casadi.traffic.sample import apply_behaviours, needs_waypoint
 
@@ -300,8 +300,8 @@ class SampledScenario:
             }
             for i in range(self.n_ships)
         ]
-        if targets != "avoid":  # hold course and speed ("none"), or avoid with the method named
-            for ship in ships[1:]:
+        if targets == "hold" or targets in TARGET_METHODS:  # hold course and speed ("none"), or avoid with the
+            for ship in ships[1:]:  # method named (a mix: apply_behaviours below)
                 ship["method"] = "none" if targets == "hold" else targets
         if target_vessels != "own":
             hulls = target_vessels.split(",")

@@ -118,6 +118,6 @@ def is_mix(value: str) -> bool:
     Returns
     -------
     bool
-        True for ``"mix:..."``.
+        True for ``"mix:..."`` (not for ``avoid``, ``hold`` or a method's name).
     """
-    return value not in PURE
+    return isinstance(value, str) and value.startswith("mix:")
