@@ -1,7 +1,8 @@
 """``study hardest``: the K hardest situations a falsification found for one method, and every method on them.
 
-The suite is the least robust failure of each distinct failure (:meth:`~mmg_casadi.falsify.falsifier.
-Falsification.hardest`), least robust first, topped up with the least robust runs that did not fail; it is taken
+The suite is the least robust failure of each distinct failure
+(:meth:`~mmg_casadi.falsify.falsifier.Falsification.hardest`), least robust first, topped up with the least robust runs
+that did not fail; it is taken
 from an output of ``mmg-casadi falsify`` (``--from DIR``) or searched here for the first of ``--methods``. Every
 method then sails every situation of the suite (every ship with the method, as in the study), judged by the same
 objective; methods are compared pairwise on the same situations with McNemar's exact test on the discordant ones

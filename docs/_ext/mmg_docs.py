@@ -85,6 +85,9 @@ def write_flat_api() -> None:
 def _flat_names() -> dict[str, tuple[str, str]]:
     """``mmg_casadi.__all__`` name → (defining module, name there), read from the package's imports."""
     import mmg_casadi
+    lazy = getattr(mmg_casadi, "_PUBLIC", None)  # the flat names loaded on first use: name -> (module, name there)
+    if lazy is not None:
+        return {k: tuple(v) for k, v in lazy.items() if k in mmg_casadi.__all__}
     tree = ast.parse(Path(mmg_casadi.__file__).read_text(encoding="utf-8"))
     out = {}
     for node in tree.body:
@@ -345,6 +348,10 @@ OUTCOME_DOCS = {
     "stalled": "made no progress towards its goal during the last `stall_window` before `t_max`; `stalled_at` "
                "is the position closest to the goal",
     "timeout": "none of the above by `t_max`",
+    "grounded": "touched land: her voyage ended there (held where she touched, engine stopped, rudder amidships; a "
+                "static hazard to the others); never `reached`, `time_to_goal` is null",
+    "collided": "came within the collision distance of a ship or an obstacle, or touched a wall: her voyage ended "
+                "there as for `grounded`",
 }
 
 RUN_FAILURE_DOCS = {
@@ -459,6 +466,9 @@ def write_formats() -> None:
                       "`late` (her method acts once it has wanted to for `late_delay`), `wrong` (to port by "
                       "`wrong_turn` in a head-on or crossing risk), `intent` (holds her route, whose waypoint is "
                       "where she changes her mind); not the first ship"),
+        "route": ("string", "the parameter `route`", "", "`plan`: her route is planned around the land clearing every "
+                  "polygon by `route_clearance` (`mmg_casadi.scenarios.routes`); `as-given`: her waypoints as "
+                  "written"),
         "late_delay": ("number >= 0", "required with `late`", "L/U", "a late ship's delay"),
         "wrong_turn": ("number in (0, 90]", "required with `wrong`", "deg", "a wrong-way ship's turn to port"),
         "track": ("string or table", "none (simulated)", "L/U, L",

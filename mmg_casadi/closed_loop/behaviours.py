@@ -19,7 +19,9 @@ def gate(c: dict, i: int, Xi, S_: dict, *, psi_d, w_react, psi_route, psi_plain,
     i : int
         The ship.
     Xi : SX
-        Her rows at the start of the step; ``S_`` their columns.
+        Her rows at the start of the step.
+    S_ : dict
+        Row name -> index into ``Xi``.
     psi_d, w_react : SX
         Her method's desired heading and reactive weight (as a ship of her method).
     psi_route, psi_plain : SX

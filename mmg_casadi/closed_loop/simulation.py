@@ -92,8 +92,8 @@ def load_if_cached(layout: Layout) -> bool:
     """Load the compiled library of ``layout`` if the disk cache holds it (trusted), and say whether it did.
 
     The Functions are built and their C source generated once for both the test and the loading (a study's
-    start tests every layout it needs before compiling the missing ones, :func:`~mmg_casadi.montecarlo.batching
-    .prepare_layouts`).
+    start tests every layout it needs before compiling the missing ones,
+    :func:`~mmg_casadi.montecarlo.batching.prepare_layouts`).
 
     Parameters
     ----------

@@ -6,7 +6,7 @@ of radius ``R`` about the own ship's start, at the bearing ``beta`` (the only co
 (they start on their routes at their steady speeds), so their relative motion is a straight line: the own ship at
 ``(t, 0)``, the target at ``(R cos beta, R sin beta − v t)``. Its closest approach is
 
-    d_cpa(beta) = R |sin(beta − phi)|,   phi = atan(v),   at t* = R (cos beta + v sin beta) / (1 + v²),
+    d_cpa(beta) = R abs(sin(beta − phi)),   phi = atan(v),   at t* = R (cos beta + v sin beta) / (1 + v²),
 
 and the ships collide (``d_cpa`` below the collision distance ``c``, with ``t* > 0``) exactly for ``beta`` in
 
@@ -40,6 +40,10 @@ class CrossingCase(Envelope):
         The target's speed (fraction of the design speed).
     length : float, default 100
         Length of both ships' routes (L).
+    config : SamplerConfig, optional
+        As for :class:`~mmg_casadi.falsify.envelope.Envelope` (the sampler's settings; unused by the one coordinate).
+    disturbance : DisturbanceRanges, optional
+        As for :class:`~mmg_casadi.falsify.envelope.Envelope` (None: calm water).
 
     Examples
     --------

@@ -19,8 +19,9 @@ Objectives (:data:`OBJECTIVES`), each a number that is negative exactly when the
     when a rule is broken, and ``1`` when the own ship met no risk of collision. Scores on the history every
     :data:`~mmg_casadi.montecarlo.execution.HISTORY_EVERY` steps, as the study.
 
-Every evaluation rolls the scenarios out with the study's compiled step (:func:`~mmg_casadi.closed_loop.
-simulation.simulate_batch_history`, a history at every step) and keeps, for a failure, the encounter geometry
+Every evaluation rolls the scenarios out with the study's compiled step
+(:func:`~mmg_casadi.closed_loop.simulation.simulate_batch_history`, a history at every step) and keeps, for a failure,
+the encounter geometry
 that :mod:`~mmg_casadi.falsify.report` clusters (:func:`failure_geometry`).
 """
 

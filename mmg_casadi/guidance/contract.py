@@ -231,7 +231,7 @@ class Method:
     tallies : tuple of str
         Memory rows that count events over a run (e.g. solves and failures of a planner): they start at 0, take the
         builder's value while the method steers and keep their value otherwise (never reset to the heading); the
-        run's outputs report them (:func:`~mmg_casadi.guidance.methods.tallies_of`).
+        run's outputs report them (:func:`~mmg_casadi.closed_loop.state.tallies`).
     """
 
     name: str

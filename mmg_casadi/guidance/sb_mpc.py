@@ -30,7 +30,7 @@ numbers) where the paper's formulation is kept, converted to the scene's units w
 L, times in L/U, speeds in U); each :data:`PARAMS` entry names its source and says where the choice is ours.
 
 **In the closed loop.** The method is in charge while a neighbour is within its own sensing range ``sb_mpc_range``
-(:attr:`~mmg_casadi.guidance.contract.Method.sensing`) or a wall or land edge within reach of its horizon, and
+(``Method.sensing``) or a wall or land edge within reach of its horizon, and
 orders the course and the propeller speed of its behaviour (the engine model follows the rpm, keeping at least
 dead slow ahead). Its memory (:data:`MEMORY`): the course held, a code of the behaviour held (level and offset) and
 the time since the decision. Between decisions nothing is evaluated (a conditional). The own ship's yaw rate at a
@@ -457,7 +457,7 @@ def sb_mpc_command(g) -> Command:
 
 def engaged(memory: dict):
     """1 while the method holds a behaviour (a neighbour within its range, or land within its reach), so the closed
-    loop keeps it in charge beyond R_safe (:attr:`~mmg_casadi.guidance.contract.Method.engaged`).
+    loop keeps it in charge beyond R_safe (``Method.engaged``).
 
     Parameters
     ----------

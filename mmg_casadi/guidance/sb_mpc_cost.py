@@ -8,7 +8,7 @@ level P, held over the horizon) by its predicted hazard (their eq. 9, with the t
           + κ_SO SO_k + κ_RA RA_k + κ_port PT_k + G_k + f(P, χ_ca) + g(P, χ_ca)
 
 * **collision risk × cost** (Johansen eqs. 6–7): R_i(t) = (d_safe / d_i(t))^q / t^p while the predicted range
-  d_i(t) < d_safe, else 0, discounted in time by 1/t^p; C_i = K_coll max(|v_0(t) − v_i|², Δv_min²) (the own
+  d_i(t) < d_safe, else 0, discounted in time by 1/t^p; C_i = K_coll max(‖v_0(t) − v_i‖², Δv_min²) (the own
   ship's predicted velocity, the neighbour's constant one; ours: the relative speed floored at Δv_min, since two
   ships on parallel courses at equal speed otherwise meet at no cost and a small turn of either collides).
   q = 4 (:data:`Q`), the value of the group's implementations;
@@ -44,7 +44,7 @@ level P, held over the horizon) by its predicted hazard (their eq. 9, with the t
   ``calculate_grounding_cost`` without wind): G_k = max_t G_1 exp(−G_3 max(d_land(t) − d_land_safe, 0) − G_4 t)
   with d_land(t) the predicted distance to the nearest wall or land edge, every second sample;
 * **control deviation and transition** (Johansen eqs. 10–11): f = K_P (1 − P) + K_χ χ_ca², K_χ larger to port;
-  g = K_ΔP |P − P_last| + K_Δχ (χ_ca − χ_ca,last)², K_Δχ larger to port (prefer starboard, penalise switching).
+  g = K_ΔP abs(P − P_last) + K_Δχ (χ_ca − χ_ca,last)², K_Δχ larger to port (prefer starboard, penalise switching).
 
 Johansen et al. take the maximum over the neighbours; ours is the sum (and, for each neighbour, the mean over
 time added to the maximum, ``K_mean``): with maxima alone a behaviour-independent term of one neighbour (a risk

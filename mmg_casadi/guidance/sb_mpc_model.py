@@ -4,8 +4,8 @@ identified from the MMG model with the toolkit's own simulation.
 A control behaviour of the scenario-based MPC (:mod:`mmg_casadi.guidance.sb_mpc`) is a course and a propeller
 speed held over the horizon. Johansen, Perez & Cristofaro (2016, IEEE T-ITS 17(12), §III) predict the own ship by
 simulating her model under her autopilot; here the model is reduced to what decides a passing distance, the
-heading and speed response under the closed loop's PD heading controller (:func:`~mmg_casadi.guidance.
-heading_control.pd_heading`, the step's gains ``kp``, ``kd``, ``delta_max``):
+heading and speed response under the closed loop's PD heading controller
+(:func:`~mmg_casadi.guidance.heading_control.pd_heading`, the step's gains ``kp``, ``kd``, ``delta_max``):
 
 * **Heading**, first-order Nomoto with the PD law and the rudder saturation (eq. nomoto)::
 
@@ -30,8 +30,9 @@ heading_control.pd_heading`, the step's gains ``kp``, ``kd``, ``delta_max``):
 The equations are integrated with explicit Euler steps of ``h`` (the default prediction: 15 samples over 15 L/U,
 two steps per sample, h = 0.5 L/U).
 
-**Identification** (:func:`identify_reduced_model`): the MMG model of the vessel (:func:`~mmg_casadi.vessel.mmg.
-build_mmg`, RK4 at the guidance step) under the PD heading controller with the table's default gains and the engine
+**Identification** (:func:`identify_reduced_model`): the MMG model of the vessel
+(:func:`~mmg_casadi.vessel.mmg.build_mmg`, RK4 at the guidance step) under the PD heading controller with the table's
+default gains and the engine
 model (:func:`~mmg_casadi.vessel.actuators.engine_step`) sails, from steady running at her design speed, each
 course alteration of 0°, ±30°, ±60°, ±90° at each propeller order of full, half and dead slow ahead for 20 L/U;
 (K', T', T_u, a) are the least-squares fit (``scipy.optimize.least_squares``) of this module's predictor, with the

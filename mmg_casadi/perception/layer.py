@@ -1,6 +1,6 @@
 """The perception layer inside the compiled step: what the own ship's method knows of the other ships.
 
-With ``perception`` other than ``"off"`` (:attr:`~mmg_casadi.closed_loop.layout.Layout.perception`) the own ship
+With ``perception`` other than ``"off"`` (``Layout.perception``) the own ship
 (ship 0) no longer sees the true states of the other ships: at every guidance step, before her method runs, the
 layer takes the true states, draws the sensors' noise, updates what she knows and hands her method the perceived
 positions, velocities and presence instead of the truth (static obstacles stay known, from the chart). Everything

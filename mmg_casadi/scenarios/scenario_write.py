@@ -15,7 +15,7 @@ SETTINGS_FIELDS = ("dt", "t_max", "r_safe", "collision_distance", "goal_toleranc
 """Table parameters that are fields of :class:`~mmg_casadi.scenarios.scenario.Settings` (the others are kept in its
 ``params``)."""
 PARAM_KEYS = tuple(k for k in PARAMETERS if k not in SETTINGS_FIELDS)
-"""Table parameters written from :attr:`Settings.params <mmg_casadi.scenarios.scenario.Settings.params>`."""
+"""Table parameters written from ``Settings.params``."""
 
 
 def _ship_dict(ship) -> dict:

@@ -1,6 +1,6 @@
 """Target behaviours inside the compiled step: holding, giving way late, turning the wrong way.
 
-A ship listed in :attr:`Layout.traffic <mmg_casadi.closed_loop.layout.Layout.traffic>` keeps her method (the
+A ship listed in ``Layout.traffic`` keeps her method (the
 layout's) and gets four numeric inputs (:data:`SHIP_INPUTS`) that select what she does with it, so that every run of
 a study with a mix of behaviours shares one compiled step whatever each ship drew:
 
