@@ -21,7 +21,7 @@ def perceive(layout, c: dict):
     layout : Layout
         A layout with perception (``layout.perception != "off"``).
     c : dict
-        The step's context (:func:`mmg_casadi.closed_loop.step._step_context`): named parameters ``P`` (with
+        The step's context (``mmg_casadi.closed_loop.step._step_context``): named parameters ``P`` (with
         ``P["perception"]``, the :data:`INPUTS`), clock ``t``, ship states ``X``, true positions, velocities and
         presence.
 
