@@ -48,7 +48,7 @@ _PUBLIC = {
     "load_plugin": ("mmg_casadi.guidance.plugins", "load"),
     "run_study": ("mmg_casadi.montecarlo.study", "run_study"),
     "PARAMETERS": ("mmg_casadi.params", "PARAMETERS"),
-    "Param": ("mmg_casadi.params", "Param"),
+    "Param": ("mmg_casadi.param_spec", "Param"),
     "load_params": ("mmg_casadi.params", "load_file"),
     "resolve_params": ("mmg_casadi.params", "resolve"),
     "ScenarioResult": ("mmg_casadi.scenarios.run", "ScenarioResult"),
